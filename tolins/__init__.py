@@ -1,0 +1,25 @@
+"""tolins: a contact-physics benchmark for delicate industrial insertion.
+
+Importing tolins registers its environments with gymnasium (``tolins/...-v0``).
+"""
+
+import os
+from importlib.metadata import PackageNotFoundError, version
+
+# Headless rendering: MuJoCo reads MUJOCO_GL when it is first imported.
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+    os.environ["MUJOCO_GL"] = "egl"
+
+
+from tolins.envs import register_envs  # noqa: E402
+from tolins.geometry import CircularSocket, PolygonSocket, sample_defects
+from tolins.mjcf import make_mjcf
+
+try:
+    __version__ = version("tolins")
+except PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = "0.0.0"
+
+register_envs()
+
+__all__ = ["CircularSocket", "PolygonSocket", "__version__", "make_mjcf", "sample_defects"]

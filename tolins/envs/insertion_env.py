@@ -1,0 +1,255 @@
+"""The insertion environment: the paper's task interface over a choice of simulators."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tolins.envs.backend import Backend, BackendState
+from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.geometry.defects import sample_defects
+from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.paper import (
+    A_MAX,
+    COLLISION_REWARD,
+    CONTROL_DT,
+    HORIZON,
+    POSE_NOISE_STD,
+    SUCCESS_REWARD,
+)
+
+#: Simulators by name: ``factory(spec, control_dt) -> Backend``.
+BACKENDS = {"mujoco": MujocoBackend}
+
+
+def _finite_vector(name: str, value: Any, size: int, allowed: str) -> np.ndarray:
+    """``value`` as a float array of ``size`` finite entries (a scalar is broadcast)."""
+    try:
+        array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy()
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name}={value!r} has the wrong shape or type; allowed: {allowed}") from error
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}={value!r} contains NaN or inf; allowed: {allowed}")
+    return array
+
+
+class InsertionEnv(gym.Env):
+    """Insert a workpiece's pins into a socket's holes (the paper's task).
+
+    **Task.** A workpiece with one or more pins starts above a board and must be
+    moved by velocity commands until its pins are inside their holes. It moves in
+    x, y, z and rotates by theta about the vertical axis (rotation about the board
+    origin, then translation).
+
+    **Action** ``[ux, uy, utheta, uz]``: velocities in mm/s and rad/s, a
+    ``Box(-a_max, a_max)`` with the paper's ``a_max = [2.5, 2.5, 0.1, 2.5]``.
+    Larger values are clipped; NaN or inf raises ``ValueError`` and leaves the
+    state untouched. Each action is held for ``control_dt`` = 0.25 s.
+
+    **Observation** (8 floats, float64):
+
+    ===  ===========  =====================================================
+    idx  name         meaning
+    ===  ===========  =====================================================
+    0-2  x̂−x*, ŷ−y*,  measured pose minus the goal ``[x*, y*, θ*]`` (mm, rad)
+         θ̂−θ*
+    3    ẑ            measured height of the pin tips over the board (mm)
+    4-5  F̂x, F̂y       horizontal force of the board on the workpiece (N)
+    6    q̂θ           torque of the board about the vertical axis (N·mm)
+    7    F̂z           vertical force of the board on the workpiece (N)
+    ===  ===========  =====================================================
+
+    Pose measurements carry Gaussian noise of std ``measurement_noise``
+    (``[x, y, theta, z]``, default the paper's ``[0.1, 0.1, 0, 0.1]``); forces carry
+    ``force_noise`` (``[Fx, Fy, q_theta, Fz]``, default 0). ``0`` turns either off.
+
+    **Success**: the pin tips are at least ``success_depth`` (default 1 mm) below
+    the board surface, ``z ≤ -success_depth``. Physically this means every pin is
+    inside its hole. Success terminates the episode.
+
+    **Collision**: a control step with a collision is one in which the magnitude of
+    the contact force of the board on the workpiece exceeded ``collision_force``
+    (default 0.5 N) at any of the backend's checks during the step.
+
+    **Reward** ``reward_success + reward_collision``: ``c (1 - k / k_max)`` with
+    c = 100 on the step ``k`` (1-based) that succeeds, and -1 on every step with a
+    collision. ``info`` has both terms.
+
+    **Horizon**: the episode is truncated after ``horizon`` = 40 steps. A simulator
+    fault (a MuJoCo warning or a non-finite state) also truncates it, with the
+    previous observation and ``info["error"]``.
+
+    **Randomisation**: ``reset()`` draws the initial pose from ``initial_pose``
+    (see :class:`InitialPoseDistribution`) around the goal, or takes
+    ``options={"pose": [x, y, theta, z]}``; ``options={"goal": [x*, y*, θ*]}`` moves
+    the goal. With ``defect_sigma``, every reset draws a new bent-pin workpiece
+    (per-pin offsets ~ N(0, sigma² I), mm) from the nominal circular ``socket``.
+
+    **Info**: ``success``, ``is_success``, ``collision``, ``n_collisions``, ``pose``
+    (true ``[x, y, theta, z]``), ``wrench`` (true ``[Fx, Fy, q_theta, Fz]``),
+    ``peak_force``, ``step``, ``goal``, ``reward_success``, ``reward_collision``, and
+    ``error`` after a fault.
+
+    Version history: v0, the first release.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+    def __init__(
+        self,
+        socket: SocketSpec,
+        *,
+        backend: str = "mujoco",
+        measurement_noise: Any = POSE_NOISE_STD,
+        force_noise: Any = 0.0,
+        goal: Any = (0.0, 0.0, 0.0),
+        horizon: int = HORIZON,
+        control_dt: float = CONTROL_DT,
+        success_depth: float = 1.0,
+        collision_force: float = 0.5,
+        defect_sigma: float | None = None,
+        initial_pose: InitialPoseDistribution | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        if not isinstance(socket, (CircularSocket, PolygonSocket)):
+            raise ValueError(f"socket={socket!r}; allowed: a CircularSocket or PolygonSocket")
+        if backend not in BACKENDS:
+            raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
+        if defect_sigma is not None and not isinstance(socket, CircularSocket):
+            raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
+        for name, value in (("success_depth", success_depth), ("collision_force", collision_force)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name}={value!r}; allowed: a finite number > 0")
+        if int(horizon) != horizon or horizon < 1:
+            raise ValueError(f"horizon={horizon!r}; allowed: an integer ≥ 1")
+        self.nominal_socket = socket
+        self.socket = socket
+        self.backend_name = backend
+        self.measurement_noise = _finite_vector(
+            "measurement_noise", measurement_noise, 4, "std ≥ 0 for [x, y, theta, z]"
+        )
+        self.force_noise = _finite_vector(
+            "force_noise", force_noise, 4, "std ≥ 0 for [Fx, Fy, q_theta, Fz]"
+        )
+        if np.any(self.measurement_noise < 0) or np.any(self.force_noise < 0):
+            raise ValueError("measurement_noise and force_noise must be ≥ 0")
+        self._noise_std = np.concatenate([self.measurement_noise, self.force_noise])
+        self.goal = goal
+        self.horizon = int(horizon)
+        self.control_dt = float(control_dt)
+        self.success_depth = float(success_depth)
+        self.collision_force = float(collision_force)
+        self.defect_sigma = defect_sigma
+        self.initial_pose = initial_pose or InitialPoseDistribution()
+        self.render_mode = render_mode
+        self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
+        self.backend: Backend = BACKENDS[backend](socket, self.control_dt)
+        self._state: BackendState | None = None
+        self._observation = np.zeros(8)
+        self._step = 0
+        self._n_collisions = 0
+        self._renderer = None
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The goal ``[x*, y*, theta*]`` (mm, rad) the observation is measured from."""
+        return self._goal.copy()
+
+    @goal.setter
+    def goal(self, value: Any) -> None:
+        self._goal = _finite_vector("goal", value, 3, "[x*, y*, theta*] in mm and rad")
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = options or {}
+        unknown = set(options) - {"pose", "goal"}
+        if unknown:
+            raise ValueError(f"reset options {sorted(unknown)} are unknown; allowed: 'pose', 'goal'")
+        if "goal" in options:
+            self.goal = options["goal"]
+        if self.defect_sigma is not None:
+            self.socket = sample_defects(self.nominal_socket, self.defect_sigma, self.np_random)
+            self.backend = BACKENDS[self.backend_name](self.socket, self.control_dt)
+            self.close()
+        if "pose" in options:
+            pose = _finite_vector("options['pose']", options["pose"], 4, "[x, y, theta, z]")
+        else:
+            pose = self.initial_pose.sample(self.np_random, self._goal)
+        self._state = self.backend.reset(pose)
+        self._step = 0
+        self._n_collisions = 0
+        self._observation = self._observe(self._state)
+        return self._observation.copy(), self._info(collision=False, reward=(0.0, 0.0))
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._state is None:
+            raise RuntimeError("step() called before reset()")
+        action = np.asarray(action, dtype=float)
+        if action.shape != (4,):
+            raise ValueError(f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]")
+        if not np.all(np.isfinite(action)):
+            raise ValueError(f"action={action.tolist()!r} contains NaN or inf; allowed: finite values")
+        state = self.backend.step(np.clip(action, -A_MAX, A_MAX))
+        self._step += 1
+        if state.error is not None:
+            info = self._info(collision=False, reward=(0.0, 0.0))
+            info["error"] = state.error
+            return self._observation.copy(), 0.0, False, True, info
+        self._state = state
+        collision = state.peak_force > self.collision_force
+        self._n_collisions += int(collision)
+        success = self._success(state)
+        reward_success = SUCCESS_REWARD * (1 - self._step / self.horizon) if success else 0.0
+        reward_collision = COLLISION_REWARD if collision else 0.0
+        self._observation = self._observe(state)
+        truncated = not success and self._step >= self.horizon
+        info = self._info(collision=collision, reward=(reward_success, reward_collision))
+        return self._observation.copy(), reward_success + reward_collision, success, truncated, info
+
+    def _success(self, state: BackendState) -> bool:
+        return bool(state.pose[3] <= -self.success_depth)
+
+    def _observe(self, state: BackendState) -> np.ndarray:
+        exact = np.concatenate([state.pose[:3] - self._goal, state.pose[3:], state.wrench])
+        noise = self.np_random.normal(0.0, 1.0, 8) * self._noise_std
+        return exact + noise
+
+    def _info(self, *, collision: bool, reward: tuple[float, float]) -> dict[str, Any]:
+        state = self._state
+        success = self._success(state)
+        return {
+            "success": success,
+            "is_success": success,
+            "collision": collision,
+            "n_collisions": self._n_collisions,
+            "pose": state.pose.copy(),
+            "wrench": state.wrench.copy(),
+            "peak_force": state.peak_force,
+            "step": self._step,
+            "goal": self._goal.copy(),
+            "reward_success": reward[0],
+            "reward_collision": reward[1],
+        }
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        import mujoco
+
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(self.backend.model, 480, 640)
+        self._renderer.update_scene(self.backend.data)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

@@ -1,0 +1,103 @@
+"""Contact physics: one MuJoCo model of a socket, stepped one control period at a time."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from tolins.envs.backend import BackendState
+from tolins.geometry.specs import SocketSpec
+from tolins.mjcf import make_mjcf
+
+#: Model units (mN, µN·m) to the API's N and N·mm.
+_FORCE_SCALE = 1e-3
+#: Pose ``[x, y, theta, z]`` ↔ joint order ``x, y, z, theta`` (qpos, act and ctrl).
+_POSE_TO_JOINT = np.array([0, 1, 3, 2])
+_JOINT_TO_POSE = np.array([0, 1, 3, 2])
+
+
+class MujocoBackend:
+    """Steps a compiled socket model with re-anchored velocity servos.
+
+    At the start of every control step each servo's integrated set-point is reset to
+    the joint's current position, then the commanded velocity is integrated over the
+    step. A blocked workpiece so stops at the first contact and pushes with at most
+    the servo's force limit instead of winding up.
+
+    Args:
+        spec: The socket.
+        control_dt: Control period (s); a whole number of physics steps.
+        contact_checks: How many times per control step the contact force is read
+            (evenly spaced), for ``peak_force``.
+    """
+
+    def __init__(self, spec: SocketSpec, control_dt: float, contact_checks: int = 5) -> None:
+        self.spec = spec
+        self.model = mujoco.MjModel.from_xml_string(make_mjcf(spec))
+        self.data = mujoco.MjData(self.model)
+        substeps = round(control_dt / self.model.opt.timestep)
+        if substeps < 1 or abs(substeps * self.model.opt.timestep - control_dt) > 1e-9:
+            raise ValueError(
+                f"control_dt={control_dt!r} is not a whole number of physics steps of "
+                f"{self.model.opt.timestep} s"
+            )
+        if not 1 <= contact_checks <= substeps or substeps % contact_checks:
+            raise ValueError(
+                f"contact_checks={contact_checks!r} must divide the {substeps} physics "
+                "steps of a control step"
+            )
+        self.substeps = substeps
+        self._chunk = substeps // contact_checks
+        self._checks = contact_checks
+        self._force = self.model.sensor("force").adr[0]
+        self._torque = self.model.sensor("torque").adr[0]
+
+    def _state(self, peak_force: float, error: str | None = None) -> BackendState:
+        d = self.data
+        theta = d.qpos[3]
+        fx, fy, fz = -d.sensordata[self._force : self._force + 3]
+        c, s = np.cos(theta), np.sin(theta)
+        wrench = np.array([c * fx - s * fy, s * fx + c * fy, -d.sensordata[self._torque + 2], fz])
+        return BackendState(
+            pose=d.qpos[_JOINT_TO_POSE].copy(),
+            wrench=wrench * _FORCE_SCALE,
+            peak_force=peak_force,
+            error=error,
+        )
+
+    def _contact_force(self) -> float:
+        f = self.data.sensordata[self._force : self._force + 3]
+        return float(np.sqrt(f @ f)) * _FORCE_SCALE
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.qpos[:] = np.asarray(pose, dtype=float)[_POSE_TO_JOINT]
+        d.act[:] = d.qpos
+        mujoco.mj_forward(m, d)
+        return self._state(self._contact_force())
+
+    def step(self, velocity: np.ndarray) -> BackendState:
+        m, d = self.model, self.data
+        warnings_before = int(d.warning.number.sum())
+        d.act[:] = d.qpos
+        d.ctrl[:] = np.asarray(velocity, dtype=float)[_POSE_TO_JOINT]
+        peak = 0.0
+        for _ in range(self._checks):
+            mujoco.mj_step(m, d, nstep=self._chunk)
+            peak = max(peak, self._contact_force())
+        error = self._fault(warnings_before)
+        return self._state(peak, error)
+
+    def _fault(self, warnings_before: int) -> str | None:
+        d = self.data
+        if int(d.warning.number.sum()) != warnings_before:
+            raised = [
+                mujoco.mjtWarning(i).name
+                for i, w in enumerate(d.warning)
+                if w.number > 0
+            ]
+            return f"MuJoCo warning during the step: {', '.join(raised)}"
+        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            return "non-finite MuJoCo state"
+        return None

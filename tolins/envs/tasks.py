@@ -1,0 +1,84 @@
+"""The task table: every preset workpiece, feeding the gymnasium ids and the dm_control suite."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+
+from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+
+ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
+#: Bent-pin std (mm) of the defective preset: about 60 % of its workpieces insert at
+#: the nominal goal (two pins, each inside a 0.2 mm clearance with probability √0.6).
+DEFECT_SIGMA = 0.12
+
+
+@dataclass(frozen=True)
+class Task:
+    """One preset workpiece.
+
+    Attributes:
+        name: Gymnasium name, ``tolins/{name}-v0``.
+        domain: dm_control domain name (task ``insert``).
+        socket: The (nominal) socket.
+        tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``.
+        defect_sigma: Bent-pin std (mm) re-sampled at every reset, or ``None``.
+    """
+
+    name: str
+    domain: str
+    socket: SocketSpec
+    tags: tuple[str, ...]
+    defect_sigma: float | None = None
+
+    @property
+    def gym_id(self) -> str:
+        return f"tolins/{self.name}-v0"
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        kwargs: dict[str, Any] = {"socket": self.socket}
+        if self.defect_sigma is not None:
+            kwargs["defect_sigma"] = self.defect_sigma
+        return kwargs
+
+
+def _circle(cols: int, *tags: str, defect_sigma: float | None = None) -> Task:
+    suffix = "Defective" if defect_sigma else ""
+    return Task(
+        name=f"Circle2x{cols}{suffix}",
+        domain=f"circle2x{cols}{'_defective' if defect_sigma else ''}",
+        socket=CircularSocket(rows=2, cols=cols),
+        tags=("paper", "circle", *tags),
+        defect_sigma=defect_sigma,
+    )
+
+
+def _polygon(name: str, sides: int, pin: float, hole: float) -> Task:
+    return Task(name, name.lower(), PolygonSocket(sides, pin, hole), ("paper", "polygon"))
+
+
+#: Table 1's workpieces (sizes from its caption).
+TASKS: tuple[Task, ...] = (
+    _circle(1),
+    _circle(2),
+    _circle(4),
+    _circle(8),
+    _circle(1, "defective", defect_sigma=DEFECT_SIGMA),
+    _polygon("Square", 4, 1.5, 1.65),
+    _polygon("Pentagon", 5, 1.5, 1.65),
+    _polygon("Hexagon", 6, 1.2, 1.26),
+)
+#: The generic id; pass ``socket=`` (and any other keyword) to ``gymnasium.make``.
+GENERIC_ID = "tolins/Insert-v0"
+
+
+def register_envs() -> None:
+    """Register every task (and the generic id) with gymnasium; safe to call twice."""
+    for task in TASKS:
+        if task.gym_id not in gym.registry:
+            gym.register(id=task.gym_id, entry_point=ENTRY_POINT, kwargs=task.env_kwargs)
+    if GENERIC_ID not in gym.registry:
+        gym.register(id=GENERIC_ID, entry_point=ENTRY_POINT)

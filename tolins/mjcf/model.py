@@ -1,0 +1,203 @@
+"""``make_mjcf(spec)``: a socket spec as an MJCF model (units: mm, kg, s).
+
+Model units: lengths in mm, so forces are in mN (kg·mm/s²) and torques in
+µN·m = 1e-3 N·mm. The environment converts to N and N·mm.
+
+Elements (every one named):
+
+* ``board``: a static body of convex pieces: ``hole{h}_wall{k}`` prisms (meshes
+  ``wall{k}``) around each hole and ``board_box{i}`` boxes elsewhere. Top at z = 0.
+* ``workpiece``: the carriage, on joints ``x``, ``y``, ``z`` (slides) and ``theta``
+  (hinge about z), driven by ``intvelocity`` servos ``ux``, ``uy``, ``uz``,
+  ``utheta`` (control = velocity in mm/s or rad/s) with bounded force.
+* ``pins``: a joint-free child of the carriage holding the pin geoms ``pin{i}``
+  (tips at z = 0 in the workpiece frame), the sites ``pin{i}_tip`` and the
+  force/torque site ``ft_site`` read by the sensors ``force`` and ``torque``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tolins.geometry.specs import (
+    CIRCLE_HOLE_SIDES,
+    CircularSocket,
+    PolygonSocket,
+    SocketSpec,
+    inradius,
+    polygon_vertices,
+)
+from tolins.mjcf.board import board_boxes, hole_wall_pieces
+from tolins.mjcf.xml import num, nums
+from tolins.paper import A_MAX
+
+#: Physics step (s). Steps of 4 ms or more let pins 10–20 µm outside the clearance slip in.
+TIMESTEP = 0.002
+BOARD_THICKNESS = 3.0
+PIN_LENGTH = 4.0
+#: Width (mm) of a hole cell's wall ring when no neighbour limits it.
+CELL_WALL = 1.0
+#: Servo force limits in model units: 5 N on x, y, z; 0.02 N·m about z.
+FORCE_LIMIT = 5000.0
+TORQUE_LIMIT = 20000.0
+#: Reflected robot inertia (armature): kg on the slides, kg·mm² on the hinge.
+SLIDE_ARMATURE = 1.0
+HINGE_ARMATURE = 1000.0
+#: Servo stiffness (model units per mm or rad); damping is critical for the armature.
+SLIDE_KP = 2.0e5
+HINGE_KP = 2.0e8
+#: Contact parameters (width in mm): stiff, nearly hard contacts with light friction.
+SOLREF = "0.004 1"
+SOLIMP = "0.99 0.999 0.01"
+FRICTION = 0.3
+
+
+def _cell_half_width(spec: SocketSpec) -> float:
+    if isinstance(spec, PolygonSocket):
+        return spec.hole_circumradius + CELL_WALL
+    limits = [spec.hole_circumradius + CELL_WALL]
+    if spec.rows > 1:
+        limits.append(spec.row_pitch / 2)
+    if spec.cols > 1:
+        limits.append(spec.col_pitch / 2)
+    return min(limits)
+
+
+def _hole_shape(spec: SocketSpec) -> tuple[int, float]:
+    """Sides and circumradius of the polygon that models each hole."""
+    if isinstance(spec, CircularSocket):
+        return CIRCLE_HOLE_SIDES, spec.hole_circumradius
+    return spec.sides, spec.hole_circumradius
+
+
+def _prism_vertices(outline: np.ndarray, z_top: float, z_bottom: float) -> str:
+    top = np.column_stack([outline, np.full(len(outline), z_top)])
+    bottom = np.column_stack([outline, np.full(len(outline), z_bottom)])
+    return nums(np.concatenate([top, bottom]).ravel())
+
+
+def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
+    sides, circumradius = _hole_shape(spec)
+    half_width = _cell_half_width(spec)
+    pieces = hole_wall_pieces(sides, circumradius, half_width)
+    assets = [
+        f'<mesh name="wall{k}" vertex="{_prism_vertices(p, 0.0, -BOARD_THICKNESS)}"/>'
+        for k, p in enumerate(pieces)
+    ]
+    body = ['<body name="board">']
+    for h, (cx, cy) in enumerate(spec.hole_centers):
+        body += [
+            f'<geom name="hole{h}_wall{k}" class="board" type="mesh" mesh="wall{k}" '
+            f'pos="{nums((cx, cy, 0.0))}"/>'
+            for k in range(sides)
+        ]
+    for i, (center, half) in enumerate(board_boxes(spec.hole_centers, half_width)):
+        body.append(
+            f'<geom name="board_box{i}" class="board" type="box" '
+            f'pos="{nums((*center, -BOARD_THICKNESS / 2))}" '
+            f'size="{nums((*half, BOARD_THICKNESS / 2))}"/>'
+        )
+    body.append("</body>")
+    return assets, body
+
+
+def _pin_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
+    half = PIN_LENGTH / 2
+    if isinstance(spec, CircularSocket):
+        geoms = [
+            f'<geom name="pin{i}" class="pin" type="cylinder" pos="{nums((x, y, half))}" '
+            f'size="{nums((spec.pin_radius, half))}"/>'
+            for i, (x, y) in enumerate(spec.pin_centers)
+        ]
+        sites = [
+            f'<site name="pin{i}_tip" pos="{nums((x, y, 0.0))}" size="0.05"/>'
+            for i, (x, y) in enumerate(spec.pin_centers)
+        ]
+        return [], geoms + sites
+    site = ['<site name="pin0_tip" pos="0 0 0" size="0.05"/>']
+    if spec.sides == 4:
+        side_half = inradius(4, spec.pin_circumradius)
+        geom = (
+            f'<geom name="pin0" class="pin" type="box" pos="{nums((0, 0, half))}" '
+            f'size="{nums((side_half, side_half, half))}"/>'
+        )
+        return [], [geom, *site]
+    outline = polygon_vertices(spec.sides, spec.pin_circumradius)
+    asset = f'<mesh name="peg" vertex="{_prism_vertices(outline, PIN_LENGTH, 0.0)}"/>'
+    geom = '<geom name="pin0" class="pin" type="mesh" mesh="peg"/>'
+    return [asset], [geom, *site]
+
+
+def _servo(
+    name: str, joint: str, kp: float, inertia: float, limit: float, speed: float, span: float
+) -> str:
+    """An integrated-velocity servo: control = velocity within ±speed, force within ±limit."""
+    kv = 2 * math.sqrt(kp * inertia)
+    return (
+        f'<intvelocity name="{name}" joint="{joint}" kp="{num(kp)}" kv="{num(kv)}" '
+        f'ctrlrange="{nums((-speed, speed))}" forcerange="{nums((-limit, limit))}" '
+        f'actrange="{nums((-span, span))}"/>'
+    )
+
+
+def make_mjcf(spec: SocketSpec) -> str:
+    """The MJCF model of ``spec``'s board and workpiece. Same spec, same bytes."""
+    if not isinstance(spec, (CircularSocket, PolygonSocket)):
+        raise ValueError(f"spec={spec!r} is not a socket; allowed: CircularSocket, PolygonSocket")
+    board_assets, board_body = _board_xml(spec)
+    pin_assets, pin_body = _pin_xml(spec)
+    extent = float(np.max(np.abs(spec.hole_centers))) + _cell_half_width(spec) + 10.0
+    slide_mass = SLIDE_ARMATURE + 0.1
+    lines = [
+        f'<mujoco model="tolins_{spec.family}">',
+        '<compiler angle="radian" autolimits="true"/>',
+        f'<option timestep="{num(TIMESTEP)}" integrator="implicitfast" solver="Newton" '
+        'tolerance="1e-10" cone="elliptic" gravity="0 0 0">',
+        '<flag multiccd="disable"/>',
+        "</option>",
+        f'<statistic center="0 0 2" extent="{num(extent)}"/>',
+        '<visual><global offwidth="1280" offheight="960"/></visual>',
+        "<default>",
+        f'<geom solref="{SOLREF}" solimp="{SOLIMP}" friction="{num(FRICTION)} 0.005 0.0001" '
+        'condim="3" margin="0" gap="0"/>',
+        '<default class="board"><geom contype="1" conaffinity="2" rgba="0.25 0.45 0.3 1"/></default>',
+        '<default class="pin"><geom contype="2" conaffinity="1" rgba="0.85 0.7 0.3 1"/></default>',
+        "</default>",
+        "<asset>",
+        *board_assets,
+        *pin_assets,
+        "</asset>",
+        "<worldbody>",
+        '<light name="key" pos="0 -30 60" dir="0 0.5 -1" directional="true"/>',
+        *board_body,
+        '<body name="workpiece">',
+        f'<joint name="x" type="slide" axis="1 0 0" armature="{num(SLIDE_ARMATURE)}"/>',
+        f'<joint name="y" type="slide" axis="0 1 0" armature="{num(SLIDE_ARMATURE)}"/>',
+        f'<joint name="z" type="slide" axis="0 0 1" armature="{num(SLIDE_ARMATURE)}"/>',
+        f'<joint name="theta" type="hinge" axis="0 0 1" armature="{num(HINGE_ARMATURE)}"/>',
+        f'<inertial pos="0 0 {num(PIN_LENGTH + 1)}" mass="0.1" diaginertia="10 10 10"/>',
+        f'<geom name="carrier" type="box" pos="0 0 {num(PIN_LENGTH + 1)}" '
+        f'size="{nums((extent - 8, extent - 8, 1))}" contype="0" conaffinity="0" '
+        'rgba="0.6 0.6 0.65 0.5"/>',
+        '<body name="pins">',
+        '<inertial pos="0 0 0" mass="0.001" diaginertia="0.001 0.001 0.001"/>',
+        '<site name="ft_site" pos="0 0 0" size="0.1"/>',
+        *pin_body,
+        "</body>",
+        "</body>",
+        "</worldbody>",
+        "<actuator>",
+        _servo("ux", "x", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[0], 1e3),
+        _servo("uy", "y", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[1], 1e3),
+        _servo("uz", "z", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[3], 1e3),
+        _servo("utheta", "theta", HINGE_KP, HINGE_ARMATURE, TORQUE_LIMIT, A_MAX[2], 10.0),
+        "</actuator>",
+        "<sensor>",
+        '<force name="force" site="ft_site"/>',
+        '<torque name="torque" site="ft_site"/>',
+        "</sensor>",
+        "</mujoco>",
+    ]
+    return "\n".join(lines) + "\n"

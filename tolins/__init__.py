@@ -11,7 +11,7 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
 
-from tolins.envs import register_envs  # noqa: E402
+from tolins.envs import register_envs
 from tolins.geometry import CircularSocket, PolygonSocket, sample_defects
 from tolins.mjcf import make_mjcf
 

@@ -30,7 +30,9 @@ def _finite_vector(name: str, value: Any, size: int, allowed: str) -> np.ndarray
     try:
         array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy()
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}={value!r} has the wrong shape or type; allowed: {allowed}") from error
+        raise ValueError(
+            f"{name}={value!r} has the wrong shape or type; allowed: {allowed}"
+        ) from error
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name}={value!r} contains NaN or inf; allowed: {allowed}")
     return array
@@ -172,7 +174,9 @@ class InsertionEnv(gym.Env):
         options = options or {}
         unknown = set(options) - {"pose", "goal"}
         if unknown:
-            raise ValueError(f"reset options {sorted(unknown)} are unknown; allowed: 'pose', 'goal'")
+            raise ValueError(
+                f"reset options {sorted(unknown)} are unknown; allowed: 'pose', 'goal'"
+            )
         if "goal" in options:
             self.goal = options["goal"]
         if self.defect_sigma is not None:
@@ -194,9 +198,13 @@ class InsertionEnv(gym.Env):
             raise RuntimeError("step() called before reset()")
         action = np.asarray(action, dtype=float)
         if action.shape != (4,):
-            raise ValueError(f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]")
+            raise ValueError(
+                f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]"
+            )
         if not np.all(np.isfinite(action)):
-            raise ValueError(f"action={action.tolist()!r} contains NaN or inf; allowed: finite values")
+            raise ValueError(
+                f"action={action.tolist()!r} contains NaN or inf; allowed: finite values"
+            )
         state = self.backend.step(np.clip(action, -A_MAX, A_MAX))
         self._step += 1
         if state.error is not None:

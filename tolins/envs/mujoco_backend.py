@@ -92,11 +92,7 @@ class MujocoBackend:
     def _fault(self, warnings_before: int) -> str | None:
         d = self.data
         if int(d.warning.number.sum()) != warnings_before:
-            raised = [
-                mujoco.mjtWarning(i).name
-                for i, w in enumerate(d.warning)
-                if w.number > 0
-            ]
+            raised = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number > 0]
             return f"MuJoCo warning during the step: {', '.join(raised)}"
         if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
             return "non-finite MuJoCo state"

@@ -19,9 +19,7 @@ def sample_defects(
     ``numpy.random.Generator`` or a seed for one.
     """
     if not isinstance(spec, CircularSocket):
-        raise ValueError(
-            f"spec={spec!r} cannot have bent pins; allowed: a CircularSocket"
-        )
+        raise ValueError(f"spec={spec!r} cannot have bent pins; allowed: a CircularSocket")
     sigma = check_positive("sigma", sigma)
     rng = np.random.default_rng(rng)
     offsets = rng.normal(0.0, sigma, size=(spec.n_pins, 2))

@@ -99,7 +99,9 @@ class CircularSocket:
                 f"for a {self.rows}*{self.cols} socket"
             )
         if not np.all(np.isfinite(array)):
-            raise ValueError(f"pin_offsets={array.tolist()!r} contains NaN or inf; allowed: finite mm")
+            raise ValueError(
+                f"pin_offsets={array.tolist()!r} contains NaN or inf; allowed: finite mm"
+            )
         half_cell = np.array([self.col_pitch, self.row_pitch]) / 2 - self.pin_radius
         outside = np.any(np.abs(array) > half_cell, axis=1)
         if np.any(outside):

@@ -75,7 +75,9 @@ def board_boxes(
 
     def add(x0: float, x1: float, y0: float, y1: float) -> None:
         if x1 - x0 > _MIN_BOX and y1 - y0 > _MIN_BOX:
-            boxes.append((np.array([(x0 + x1) / 2, (y0 + y1) / 2]), np.array([(x1 - x0) / 2, (y1 - y0) / 2])))
+            boxes.append(
+                (np.array([(x0 + x1) / 2, (y0 + y1) / 2]), np.array([(x1 - x0) / 2, (y1 - y0) / 2]))
+            )
 
     row_edges = [y_lo, *[e for y in ys for e in (y - half_width, y + half_width)], y_hi]
     for y0, y1 in zip(row_edges[::2], row_edges[1::2]):

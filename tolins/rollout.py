@@ -1,0 +1,72 @@
+"""Roll policies out in environments and summarise the episodes."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+Policy = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Episode:
+    """What one episode came to."""
+
+    reward: float
+    success: bool
+    steps: int
+    collisions: int
+    error: str | None = None
+
+
+def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episode:
+    """Run ``policy`` in ``env`` from ``reset(seed=seed)`` until the episode ends."""
+    observation, info = env.reset(seed=seed)
+    total, done = 0.0, False
+    while not done:
+        observation, reward, terminated, truncated, info = env.step(policy(observation))
+        total += reward
+        done = terminated or truncated
+    return Episode(
+        total,
+        bool(info["success"]),
+        int(info["step"]),
+        int(info["n_collisions"]),
+        info.get("error"),
+    )
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Mean and std of each figure of the paper's Table 1 over episodes."""
+
+    episodes: int
+    reward_mean: float
+    reward_std: float
+    success_mean: float
+    success_std: float
+    steps_mean: float
+    steps_std: float
+    collisions_mean: float
+    collisions_std: float
+    faults: int
+
+
+def summarise(episodes: list[Episode]) -> Summary:
+    """Table 1's figures of ``episodes``."""
+    if not episodes:
+        raise ValueError("no episodes to summarise; allowed: at least one")
+    columns = {
+        "reward": [e.reward for e in episodes],
+        "success": [float(e.success) for e in episodes],
+        "steps": [e.steps for e in episodes],
+        "collisions": [e.collisions for e in episodes],
+    }
+    stats = {}
+    for name, values in columns.items():
+        stats[f"{name}_mean"] = float(np.mean(values))
+        stats[f"{name}_std"] = float(np.std(values))
+    return Summary(len(episodes), **stats, faults=sum(e.error is not None for e in episodes))

@@ -80,10 +80,10 @@ def board_boxes(
             )
 
     row_edges = [y_lo, *[e for y in ys for e in (y - half_width, y + half_width)], y_hi]
-    for y0, y1 in zip(row_edges[::2], row_edges[1::2]):
+    for y0, y1 in zip(row_edges[::2], row_edges[1::2], strict=True):
         add(x_lo, x_hi, y0, y1)
     col_edges = [x_lo, *[e for x in xs for e in (x - half_width, x + half_width)], x_hi]
     for y in ys:
-        for x0, x1 in zip(col_edges[::2], col_edges[1::2]):
+        for x0, x1 in zip(col_edges[::2], col_edges[1::2], strict=True):
             add(x0, x1, y - half_width, y + half_width)
     return boxes

@@ -16,7 +16,8 @@ class BackendState:
         pose: True pose ``[x, y, theta, z]`` (mm, rad).
         wrench: Force and torque the board exerts on the workpiece at the end of the
             step, world axes, about the workpiece origin: ``[Fx, Fy, q_theta, Fz]`` (N, N·mm).
-        peak_force: Largest contact-force magnitude (N) seen during the step.
+        peak_force: Largest summed normal force (N) of the contacts between the board
+            and the pins seen during the step.
         error: ``None``, or what went wrong in the simulator (the state is then invalid).
     """
 

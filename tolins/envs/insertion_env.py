@@ -72,9 +72,11 @@ class InsertionEnv(gym.Env):
     the board surface, ``z ≤ -success_depth``. Physically this means every pin is
     inside its hole. Success terminates the episode.
 
-    **Collision**: a control step with a collision is one in which the magnitude of
-    the contact force of the board on the workpiece exceeded ``collision_force``
-    (default 0.5 N) at any of the backend's checks during the step.
+    **Collision**: a control step with a collision is one in which the summed normal
+    force of all contacts between the board and the pins exceeded ``collision_force``
+    (default 0.5 N) at any of the backend's checks during the step (five, evenly
+    spaced, on the MuJoCo backend). A sum of normal forces cannot cancel out, so a
+    pin wedged by a rotation (zero net force, non-zero torque) is a collision too.
 
     **Reward** ``reward_success + reward_collision``: ``c (1 - k / k_max)`` with
     c = 100 on the step ``k`` (1-based) that succeeds, and -1 on every step with a
@@ -196,7 +198,10 @@ class InsertionEnv(gym.Env):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._state is None:
             raise RuntimeError("step() called before reset()")
-        action = np.asarray(action, dtype=float)
+        try:
+            action = np.asarray(action, dtype=float)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"action={action!r} is not numeric; allowed: 4 finite floats") from error
         if action.shape != (4,):
             raise ValueError(
                 f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]"

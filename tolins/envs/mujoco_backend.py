@@ -51,6 +51,10 @@ class MujocoBackend:
         self._checks = contact_checks
         self._force = self.model.sensor("force").adr[0]
         self._torque = self.model.sensor("torque").adr[0]
+        touch = [self.model.sensor(f"pin{i}_touch").adr[0] for i in range(spec.n_pins)]
+        if touch != list(range(touch[0], touch[0] + spec.n_pins)):
+            raise RuntimeError("the pins' touch sensors are not stored contiguously")
+        self._touch = slice(touch[0], touch[0] + spec.n_pins)
 
     def _state(self, peak_force: float, error: str | None = None) -> BackendState:
         d = self.data
@@ -66,8 +70,11 @@ class MujocoBackend:
         )
 
     def _contact_force(self) -> float:
-        f = self.data.sensordata[self._force : self._force + 3]
-        return float(np.sqrt(f @ f)) * _FORCE_SCALE
+        return float(self.data.sensordata[self._touch].sum()) * _FORCE_SCALE
+
+    def pin_forces(self) -> np.ndarray:
+        """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
+        return self.data.sensordata[self._touch] * _FORCE_SCALE
 
     def reset(self, pose: np.ndarray) -> BackendState:
         m, d = self.model, self.data

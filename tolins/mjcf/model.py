@@ -12,7 +12,9 @@ Elements (every one named):
   ``utheta`` (control = velocity in mm/s or rad/s) with bounded force.
 * ``pins``: a joint-free child of the carriage holding the pin geoms ``pin{i}``
   (tips at z = 0 in the workpiece frame), the sites ``pin{i}_tip`` and the
-  force/torque site ``ft_site`` read by the sensors ``force`` and ``torque``.
+  force/torque site ``ft_site`` read by the sensors ``force`` and ``torque``, and per
+  pin a box site ``pin{i}_zone`` read by the touch sensor ``pin{i}_touch`` (the summed
+  normal force of that pin's contacts).
 """
 
 from __future__ import annotations
@@ -103,7 +105,8 @@ def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
     return assets, body
 
 
-def _pin_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
+def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
+    """Mesh assets and geoms of the pins, tips at z = 0 of the workpiece frame."""
     half = PIN_LENGTH / 2
     if isinstance(spec, CircularSocket):
         geoms = [
@@ -111,23 +114,33 @@ def _pin_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
             f'size="{nums((spec.pin_radius, half))}"/>'
             for i, (x, y) in enumerate(spec.pin_centers)
         ]
-        sites = [
-            f'<site name="pin{i}_tip" pos="{nums((x, y, 0.0))}" size="0.05"/>'
-            for i, (x, y) in enumerate(spec.pin_centers)
-        ]
-        return [], geoms + sites
-    site = ['<site name="pin0_tip" pos="0 0 0" size="0.05"/>']
+        return [], geoms
     if spec.sides == 4:
         side_half = inradius(4, spec.pin_circumradius)
         geom = (
             f'<geom name="pin0" class="pin" type="box" pos="{nums((0, 0, half))}" '
             f'size="{nums((side_half, side_half, half))}"/>'
         )
-        return [], [geom, *site]
+        return [], [geom]
     outline = polygon_vertices(spec.sides, spec.pin_circumradius)
     asset = f'<mesh name="peg" vertex="{_prism_vertices(outline, PIN_LENGTH, 0.0)}"/>'
-    geom = '<geom name="pin0" class="pin" type="mesh" mesh="peg"/>'
-    return [asset], [geom, *site]
+    return [asset], ['<geom name="pin0" class="pin" type="mesh" mesh="peg"/>']
+
+
+def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
+    """Per pin: a tip site, and a box zone around the pin read by a touch sensor (N summed
+    over the pin's contacts, without cancellation)."""
+    reach = (spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius) + 0.2
+    zone = nums((reach, reach, PIN_LENGTH / 2 + 0.2))
+    sites, sensors = [], []
+    for i, (x, y) in enumerate(spec.pin_centers):
+        sites.append(f'<site name="pin{i}_tip" pos="{nums((x, y, 0.0))}" size="0.05"/>')
+        sites.append(
+            f'<site name="pin{i}_zone" type="box" pos="{nums((x, y, PIN_LENGTH / 2))}" '
+            f'size="{zone}" rgba="0 0 0 0"/>'
+        )
+        sensors.append(f'<touch name="pin{i}_touch" site="pin{i}_zone"/>')
+    return sites, sensors
 
 
 def _servo(
@@ -147,7 +160,8 @@ def make_mjcf(spec: SocketSpec) -> str:
     if not isinstance(spec, (CircularSocket, PolygonSocket)):
         raise ValueError(f"spec={spec!r} is not a socket; allowed: CircularSocket, PolygonSocket")
     board_assets, board_body = _board_xml(spec)
-    pin_assets, pin_body = _pin_xml(spec)
+    pin_assets, pin_geoms = _pin_geoms(spec)
+    pin_sites, touch_sensors = _pin_sites(spec)
     extent = float(np.max(np.abs(spec.hole_centers))) + _cell_half_width(spec) + 10.0
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
@@ -188,7 +202,8 @@ def make_mjcf(spec: SocketSpec) -> str:
         '<body name="pins">',
         '<inertial pos="0 0 0" mass="0.001" diaginertia="0.001 0.001 0.001"/>',
         '<site name="ft_site" pos="0 0 0" size="0.1"/>',
-        *pin_body,
+        *pin_geoms,
+        *pin_sites,
         "</body>",
         "</body>",
         "</worldbody>",
@@ -201,6 +216,7 @@ def make_mjcf(spec: SocketSpec) -> str:
         "<sensor>",
         '<force name="force" site="ft_site"/>',
         '<torque name="torque" site="ft_site"/>',
+        *touch_sensors,
         "</sensor>",
         "</mujoco>",
     ]

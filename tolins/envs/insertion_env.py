@@ -201,7 +201,7 @@ class InsertionEnv(gym.Env):
         try:
             action = np.asarray(action, dtype=float)
         except (TypeError, ValueError) as error:
-            raise ValueError(f"action={action!r} is not numeric; allowed: 4 finite floats") from error
+            raise ValueError(f"action={action!r} is not numeric; allowed: 4 floats") from error
         if action.shape != (4,):
             raise ValueError(
                 f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]"

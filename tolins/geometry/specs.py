@@ -102,7 +102,13 @@ class CircularSocket:
             raise ValueError(
                 f"pin_offsets={array.tolist()!r} contains NaN or inf; allowed: finite mm"
             )
-        half_cell = np.array([self.col_pitch, self.row_pitch]) / 2 - self.pin_radius
+        # A pin must stay in its cell; a direction with a single hole has no neighbour.
+        half_cell = np.array(
+            [
+                self.col_pitch / 2 - self.pin_radius if self.cols > 1 else np.inf,
+                self.row_pitch / 2 - self.pin_radius if self.rows > 1 else np.inf,
+            ]
+        )
         outside = np.any(np.abs(array) > half_cell, axis=1)
         if np.any(outside):
             pin = int(np.argmax(outside))

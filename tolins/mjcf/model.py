@@ -130,7 +130,11 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
 def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
     """Per pin: a tip site, and a box zone around the pin read by a touch sensor (N summed
     over the pin's contacts, without cancellation)."""
-    reach = (spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius) + 0.2
+    size = spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius
+    centers = spec.pin_centers
+    gaps = np.max(np.abs(centers[:, None] - centers[None]), axis=2)
+    gaps[np.diag_indices(len(centers))] = np.inf
+    reach = min(size + 0.2, float(gaps.min()) / 2)  # zones of neighbouring pins never overlap
     zone = nums((reach, reach, PIN_LENGTH / 2 + 0.2))
     sites, sensors = [], []
     for i, (x, y) in enumerate(spec.pin_centers):

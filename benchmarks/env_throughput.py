@@ -1,0 +1,433 @@
+"""Control-step throughput of ``InsertionEnv`` against a bare MuJoCo loop, and thread scaling.
+
+Usage::
+
+    python benchmarks/env_throughput.py            # full run, about a minute on 2 cores
+    python benchmarks/env_throughput.py --quick    # a few seconds, a smoke test
+    python benchmarks/env_throughput.py --steps 20 --min-time 2
+
+What it measures, all in one run:
+
+1. **Env vs bare MuJoCo.** For each socket (circular 2*2, 2*8, 2*20; square; hexagon) and
+   two regimes (``free``: in the air, moving slowly; ``contact``: pins pressed onto the
+   board next to their holes), control steps per second of
+
+   * ``env``: ``InsertionEnv(socket, measurement_noise=0).step(action)``;
+   * ``bare``: the same model (``env.backend.model``) with a fresh ``mujoco.MjData``, the
+     same start pose and the same controls, one ``mj_step(model, data, nstep=125)`` per
+     control step after re-anchoring the servos (``data.act[:] = data.qpos``), exactly
+     what the backend does, minus everything else;
+   * ``env cc=1``: the env with its backend replaced by
+     ``MujocoBackend(socket, 0.25, contact_checks=1)`` (one contact-force read and one
+     ``mj_step`` call per control step instead of 5).
+
+   Timing is by blocks of ``--steps`` control steps (default 40 = one episode), each
+   starting from a reset, so every block simulates the same trajectory; both loops also
+   reset when an episode ends (truncation after ``horizon`` = 40 steps), and the time of
+   resets is excluded from both. Blocks of env, bare and cc=1 run in turn (at least
+   ``--repeats`` each, more for cheap cases until each variant has run ``--min-time``
+   seconds) and the fastest block of each is kept: a slow period of a shared machine
+   then hits all three alike and drops out. The ``match`` column checks that the bare
+   loop ends at the same pose as the env, bit for bit.
+
+2. **Threads.** ``--envs`` environments (2*2 socket) stepped ``--thread-steps`` control
+   steps each, round-robin, by one thread, then the same envs split into ``--threads``
+   disjoint groups stepped concurrently (``ThreadPoolExecutor``; ``mj_step`` releases
+   the GIL). Resets are included in both timings here. Best of ``--repeats``.
+   Speed-up = one-thread time / threaded time.
+
+Targets: env/bare time ratio <= 1.10 everywhere; thread speed-up >= 1.6 (2 threads).
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import math
+import os
+import platform
+import sys
+import time
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from tolins import CircularSocket, PolygonSocket
+from tolins.envs import InsertionEnv
+from tolins.envs.mujoco_backend import MujocoBackend
+
+#: Action ``[ux, uy, utheta, uz]`` -> ctrl/qpos order (joints ``x, y, z, theta``).
+ACTION_TO_JOINT = np.array([0, 1, 3, 2])
+
+RATIO_TARGET = 1.10
+SPEEDUP_TARGET = 1.6
+
+
+@dataclass(frozen=True)
+class Case:
+    socket_name: str
+    socket: object
+    regime: str
+    pose: np.ndarray  # [x, y, theta, z]
+    action: np.ndarray  # [ux, uy, utheta, uz]
+
+
+FREE_POSE = np.array([1.0, 1.0, 0.0, 15.0])
+FREE_ACTION = np.array([0.1, 0.1, 0.0, -0.5])  # descends 5 mm in 40 steps: stays in the air
+PUSH_ACTION = np.array([0.0, 0.0, 0.0, -2.5])
+
+
+def sockets() -> list[tuple[str, object, np.ndarray]]:
+    """(name, socket, blocked pose just above the board) for each benchmarked socket."""
+    circle_block = np.array([0.5, 0.0, 0.0, 0.05])  # 0.5 mm off: outside the 0.2 mm clearance
+    polygon_block = np.array([0.3, 0.0, 0.0, 0.05])
+    return [
+        ("2*2", CircularSocket(2, 2), circle_block),
+        ("2*8", CircularSocket(2, 8), circle_block),
+        ("2*20", CircularSocket(2, 20), circle_block),
+        ("square", PolygonSocket(4, 1.5, 1.65), polygon_block),
+        ("hexagon", PolygonSocket(6, 1.2, 1.26), polygon_block),
+    ]
+
+
+def cases() -> list[Case]:
+    out = []
+    for name, socket, block in sockets():
+        out.append(Case(name, socket, "free", FREE_POSE, FREE_ACTION))
+        out.append(Case(name, socket, "contact", block, PUSH_ACTION))
+    return out
+
+
+def make_env(socket, contact_checks: int | None = None) -> InsertionEnv:
+    env = InsertionEnv(socket, measurement_noise=0)
+    if contact_checks is not None:
+        env.backend = MujocoBackend(socket, env.control_dt, contact_checks=contact_checks)
+    return env
+
+
+# ---------------------------------------------------------------------------------------
+# Timed loops. Each returns (seconds spent stepping, excluding resets; extra facts).
+# ---------------------------------------------------------------------------------------
+
+
+def run_env(env: InsertionEnv, case: Case, steps: int) -> tuple[float, dict]:
+    """``steps`` control steps of ``env``; resets (untimed) whenever an episode ends."""
+    options = {"pose": case.pose}
+    action = case.action
+    step = env.step
+    clock = time.perf_counter
+    elapsed = 0.0
+    collisions = 0
+    errors = 0
+    done = steps
+    env.reset(options=options)
+    while done > 0:
+        # One episode (or the rest of the budget), timed as a block.
+        n = 0
+        t0 = clock()
+        while done > 0:
+            _, _, terminated, truncated, info = step(action)
+            n += 1
+            done -= 1
+            collisions += info["collision"]
+            if terminated or truncated:
+                break
+        elapsed += clock() - t0
+        errors += "error" in info
+        if done > 0:
+            env.reset(options=options)
+    return elapsed, {
+        "collisions": collisions,
+        "errors": errors,
+        "last_pose": info["pose"],
+    }
+
+
+def bare_reset(model: mujoco.MjModel, data: mujoco.MjData, pose: np.ndarray) -> None:
+    mujoco.mj_resetData(model, data)
+    data.qpos[:] = pose[ACTION_TO_JOINT]
+    data.act[:] = data.qpos
+    mujoco.mj_forward(model, data)
+
+
+def run_bare(
+    model: mujoco.MjModel, data: mujoco.MjData, case: Case, steps: int, horizon: int, nstep: int
+) -> tuple[float, dict]:
+    """The same control loop with nothing but MuJoCo: act <- qpos, ctrl, one mj_step call."""
+    ctrl = case.action[ACTION_TO_JOINT]
+    pose = case.pose
+    act, qpos, data_ctrl = data.act, data.qpos, data.ctrl
+    mj_step = mujoco.mj_step
+    clock = time.perf_counter
+    elapsed = 0.0
+    done = steps
+    bare_reset(model, data, pose)
+    while done > 0:
+        n = min(horizon, done)
+        t0 = clock()
+        for _ in range(n):
+            act[:] = qpos
+            data_ctrl[:] = ctrl
+            mj_step(model, data, nstep=nstep)
+        elapsed += clock() - t0
+        done -= n
+        if done > 0:
+            bare_reset(model, data, pose)
+    return elapsed, {"last_pose": qpos[ACTION_TO_JOINT].copy()}
+
+
+# ---------------------------------------------------------------------------------------
+# Part 1: env vs bare.
+# ---------------------------------------------------------------------------------------
+
+
+@dataclass
+class Result:
+    case: Case
+    block: int  # control steps per timed block
+    blocks: int  # timed blocks per variant
+    env: float  # best (fastest) block, seconds per control step
+    bare: float
+    cc1: float
+    collisions: int  # over all env blocks
+    collisions_cc1: int
+    errors: int
+    match: bool
+
+    @property
+    def steps(self) -> int:
+        return self.block * self.blocks
+
+
+def measure_case(case: Case, block: int, repeats: int, min_time: float) -> Result:
+    """Env, bare and cc=1 blocks of ``block`` control steps, interleaved; best block kept.
+
+    Each block starts from a reset, so every block of every variant simulates the same
+    trajectory. The variants run in turn (rotating who goes first), so a slow period
+    of the machine hits all three alike; the fastest block of each is the estimate.
+    """
+    env = make_env(case.socket)
+    env_cc1 = make_env(case.socket, contact_checks=1)
+    model = env.backend.model
+    data = mujoco.MjData(model)
+    nstep = env.backend.substeps
+    horizon = env.horizon
+
+    # Warm-up: one block of each loop, also a first estimate of the cost of a block.
+    t_env, _ = run_env(env, case, block)
+    run_env(env_cc1, case, block)
+    run_bare(model, data, case, block, horizon, nstep)
+    # Cheap cases get more blocks, so that each variant runs at least min_time in all.
+    blocks = max(repeats, math.ceil(min_time / t_env)) if t_env > 0 else repeats
+
+    variants = {
+        "env": lambda: run_env(env, case, block),
+        "bare": lambda: run_bare(model, data, case, block, horizon, nstep),
+        "cc1": lambda: run_env(env_cc1, case, block),
+    }
+    names = list(variants)
+    best = dict.fromkeys(names, math.inf)
+    facts: dict[str, dict] = {}
+    collisions = dict.fromkeys(names, 0)
+    errors = 0
+    for i in range(blocks):
+        for k in range(len(names)):
+            name = names[(i + k) % len(names)]
+            t, facts[name] = variants[name]()
+            best[name] = min(best[name], t)
+            collisions[name] += facts[name].get("collisions", 0)
+            errors += facts[name].get("errors", 0)
+    match = bool(np.array_equal(facts["env"]["last_pose"], facts["bare"]["last_pose"]))
+    return Result(
+        case=case,
+        block=block,
+        blocks=blocks,
+        env=best["env"] / block,
+        bare=best["bare"] / block,
+        cc1=best["cc1"] / block,
+        collisions=collisions["env"],
+        collisions_cc1=collisions["cc1"],
+        errors=errors,
+        match=match,
+    )
+
+
+def print_results(results: list[Result]) -> None:
+    header = (
+        f"{'socket':<8} {'regime':<8} {'blocks':>6} {'env st/s':>9} {'bare st/s':>10} "
+        f"{'env/bare':>9} {'ovh us':>7} {'cc=1 st/s':>10} {'cc1/bare':>9} "
+        f"{'coll':>9} {'match':>6}"
+    )
+    print(header)
+    print("-" * len(header))
+    for r in results:
+        ratio = r.env / r.bare
+        ratio1 = r.cc1 / r.bare
+        flag = " " if ratio <= RATIO_TARGET else "!"
+        flag1 = " " if ratio1 <= RATIO_TARGET else "!"
+        coll = f"{r.collisions}/{r.steps}"
+        print(
+            f"{r.case.socket_name:<8} {r.case.regime:<8} {r.blocks:>6} {1 / r.env:>9.0f} "
+            f"{1 / r.bare:>10.0f} {ratio:>8.3f}{flag} {(r.env - r.bare) * 1e6:>7.1f} "
+            f"{1 / r.cc1:>10.0f} {ratio1:>8.3f}{flag1} {coll:>9} {'yes' if r.match else 'NO':>6}"
+        )
+    print(
+        "st/s: control steps per second (one control step = 125 physics steps of 2 ms); "
+        "env/bare: time ratio;\n"
+        "ovh us: env time minus bare time per control step (microseconds); "
+        "cc=1: env with MujocoBackend(..., contact_checks=1);\n"
+        "blocks: timed blocks per variant; coll: env steps with info['collision'] / all "
+        "timed env steps;\nmatch: bare loop ends at the env's pose; !: above the target"
+    )
+
+
+def check_regimes(results: list[Result]) -> list[str]:
+    problems = []
+    for r in results:
+        name = f"{r.case.socket_name} {r.case.regime}"
+        if r.errors:
+            problems.append(f"{name}: simulator errors during the run")
+        if r.case.regime == "contact" and r.collisions != r.steps:
+            problems.append(f"{name}: only {r.collisions}/{r.steps} steps were in contact")
+        if r.case.regime == "free" and r.collisions:
+            problems.append(f"{name}: {r.collisions} steps touched the board")
+        if not r.match:
+            problems.append(f"{name}: the bare loop did not reproduce the env's trajectory")
+    return problems
+
+
+# ---------------------------------------------------------------------------------------
+# Part 3: threads.
+# ---------------------------------------------------------------------------------------
+
+
+def step_envs(envs: list[InsertionEnv], case: Case, steps: int) -> None:
+    """``steps`` control steps of every env, round-robin; resets (timed) at episode ends."""
+    options = {"pose": case.pose}
+    action = case.action
+    for env in envs:
+        env.reset(options=options)
+    for _ in range(steps):
+        for env in envs:
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset(options=options)
+
+
+def measure_threads(
+    case: Case, n_envs: int, n_threads: int, steps: int, repeats: int
+) -> tuple[float, float]:
+    """Best seconds for one thread and for ``n_threads`` threads doing the same work."""
+    envs = [make_env(case.socket) for _ in range(n_envs)]
+    groups = [envs[i::n_threads] for i in range(n_threads)]
+    clock = time.perf_counter
+    with concurrent.futures.ThreadPoolExecutor(max_workers=n_threads) as pool:
+        # Warm-up: both ways, and starts the pool's threads.
+        step_envs(envs, case, 2)
+        for f in [pool.submit(step_envs, g, case, 2) for g in groups]:
+            f.result()
+        best_one = best_many = math.inf
+        for _ in range(repeats):
+            t0 = clock()
+            step_envs(envs, case, steps)
+            best_one = min(best_one, clock() - t0)
+            t0 = clock()
+            futures = [pool.submit(step_envs, g, case, steps) for g in groups]
+            for f in futures:
+                f.result()
+            best_many = min(best_many, clock() - t0)
+    return best_one, best_many
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=40,
+        help="control steps per timed block (default 40: one episode)",
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="least timed blocks (runs) per variant; best kept"
+    )
+    parser.add_argument(
+        "--min-time",
+        type=float,
+        default=1.0,
+        help="cheap cases get more blocks until each variant has run this long (s)",
+    )
+    parser.add_argument(
+        "--thread-steps", type=int, default=80, help="control steps per env in the thread test"
+    )
+    parser.add_argument("--envs", type=int, default=8, help="envs in the thread test")
+    parser.add_argument("--threads", type=int, default=2, help="threads in the thread test")
+    parser.add_argument("--quick", action="store_true", help="a few seconds: tiny runs")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.steps, args.repeats, args.min_time, args.thread_steps = 4, 1, 0.02, 8
+    if min(args.steps, args.repeats, args.thread_steps, args.envs, args.threads) < 1:
+        parser.error("--steps, --repeats, --thread-steps, --envs and --threads must be >= 1")
+
+    start = time.perf_counter()
+    print(
+        f"python {platform.python_version()}, mujoco {mujoco.__version__}, numpy "
+        f"{np.__version__}, {os.cpu_count()} CPUs, {platform.processor() or platform.machine()}"
+    )
+    print(
+        f"blocks of {args.steps} control steps from a reset, at least {args.repeats} "
+        f"and {args.min_time} s per variant, fastest block kept; resets excluded\n"
+    )
+
+    results = [measure_case(c, args.steps, args.repeats, args.min_time) for c in cases()]
+    print_results(results)
+    problems = check_regimes(results)
+    for p in problems:
+        print(f"WARNING: {p}")
+
+    print(
+        f"\nThreads: {args.envs} envs of 2*2, {args.thread_steps} control steps each, "
+        f"1 thread vs {args.threads} threads (resets included), best of {args.repeats}"
+    )
+    header = (
+        f"{'regime':<8} {'1 thread st/s':>14} {f'{args.threads} threads st/s':>15} {'speed-up':>9}"
+    )
+    print(header)
+    print("-" * len(header))
+    speedups = []
+    for name, socket, block in sockets()[:1]:
+        for regime, pose, action in (
+            ("free", FREE_POSE, FREE_ACTION),
+            ("contact", block, PUSH_ACTION),
+        ):
+            case = Case(name, socket, regime, pose, action)
+            one, many = measure_threads(
+                case, args.envs, args.threads, args.thread_steps, args.repeats
+            )
+            total = args.envs * args.thread_steps
+            speedup = one / many
+            speedups.append(speedup)
+            flag = " " if speedup >= SPEEDUP_TARGET else "!"
+            print(f"{regime:<8} {total / one:>14.0f} {total / many:>15.0f} {speedup:>8.2f}{flag}")
+
+    worst = max(r.env / r.bare for r in results)
+    worst1 = max(r.cc1 / r.bare for r in results)
+    print(
+        f"\nworst env/bare ratio {worst:.3f} (target <= {RATIO_TARGET}): "
+        f"{'met' if worst <= RATIO_TARGET else 'NOT met'}; "
+        f"with contact_checks=1 {worst1:.3f}: {'met' if worst1 <= RATIO_TARGET else 'NOT met'}"
+    )
+    low = min(speedups)
+    print(
+        f"lowest thread speed-up {low:.2f} (target >= {SPEEDUP_TARGET}): "
+        f"{'met' if low >= SPEEDUP_TARGET else 'NOT met'}"
+    )
+    print(f"total time {time.perf_counter() - start:.1f} s")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

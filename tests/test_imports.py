@@ -1,0 +1,83 @@
+"""Import flow: geometry depends on nothing of tolins, mjcf not on the envs or policies.
+
+``import tolins.x`` runs ``tolins/__init__.py`` first, which registers the environments and
+so imports everything. Each check therefore runs in a fresh interpreter that stands in an
+empty ``tolins`` package (same ``__path__``, no ``__init__`` code) before importing the
+subpackage, then reports which ``tolins`` modules got loaded.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+_PROBE = """
+import importlib.util, json, sys, types
+if {bare}:
+    spec = importlib.util.find_spec("tolins")
+    package = types.ModuleType("tolins")
+    package.__path__ = list(spec.submodule_search_locations)
+    sys.modules["tolins"] = package
+import {module}
+prefixes = ("tolins.", "mujoco", "gymnasium")
+names = [name for name in sys.modules if name == "tolins" or name.startswith(prefixes)]
+print(json.dumps(sorted(names)))
+"""
+
+
+def _loaded(module: str, *, bare: bool = True) -> set[str]:
+    """Names of tolins (and mujoco/gymnasium) modules loaded by importing ``module``."""
+    result = subprocess.run(
+        [sys.executable, "-c", _PROBE.format(module=module, bare=bare)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    return set(json.loads(result.stdout.strip().splitlines()[-1]))
+
+
+def _tolins(names: set[str]) -> set[str]:
+    return {name for name in names if name == "tolins" or name.startswith("tolins.")}
+
+
+def test_probe_sees_what_a_plain_import_loads() -> None:
+    """Sanity check of the probe: the real package pulls in the envs and mujoco."""
+    loaded = _loaded("tolins", bare=False)
+    assert {"tolins.envs", "tolins.geometry", "tolins.mjcf"} <= loaded
+    assert "mujoco" in loaded
+    assert "tolins.envs" in _loaded("tolins.geometry", bare=False)
+
+
+@pytest.mark.parametrize(
+    "module", ["tolins.geometry", "tolins.geometry.specs", "tolins.geometry.defects"]
+)
+def test_geometry_imports_nothing_else_of_tolins(module: str) -> None:
+    loaded = _loaded(module)
+    assert module in loaded
+    outside = {
+        name
+        for name in _tolins(loaded)
+        if name not in ("tolins", "tolins.geometry") and not name.startswith("tolins.geometry.")
+    }
+    assert not outside, f"{module} imports {sorted(outside)}"
+    # "numpy and shapely only": no simulator or gym either.
+    assert not {name for name in loaded if name.startswith(("mujoco", "gymnasium"))}
+
+
+@pytest.mark.parametrize("module", ["tolins.mjcf", "tolins.mjcf.model", "tolins.mjcf.board"])
+def test_mjcf_does_not_import_envs_or_policies(module: str) -> None:
+    loaded = _tolins(_loaded(module))
+    assert module in loaded
+    forbidden = {
+        name
+        for name in loaded
+        if name.startswith(("tolins.envs", "tolins.policies"))
+        or name in ("tolins.rollout", "tolins.demo", "tolins.cli")
+    }
+    assert not forbidden, f"{module} imports {sorted(forbidden)}"
+    assert "tolins.geometry" in loaded  # the probe does see tolins imports

@@ -157,7 +157,10 @@ def test_success_reward_and_reward_terms() -> None:
     assert info["n_collisions"] == 0 and total == info["reward_success"]
 
 
-def test_simulator_fault_truncates_with_an_error_and_finite_observation(env: InsertionEnv) -> None:
+def test_simulator_fault_truncates_with_an_error_and_finite_observation(
+    env: InsertionEnv, tmp_path, monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs the warning to ./MUJOCO_LOG.TXT
     observation, _ = env.reset(seed=0)
     env.backend.data.qvel[0] = np.nan
     next_observation, reward, terminated, truncated, info = env.step(np.zeros(4))

@@ -197,3 +197,18 @@ def test_invalid_reset_options_raise(env: InsertionEnv) -> None:
         env.reset(options={"start": ABOVE})
     with pytest.raises(ValueError, match="pose"):
         env.reset(options={"pose": [0.0, 0.0, np.nan, 1.0]})
+
+
+def test_rgb_array_render_shows_the_parts() -> None:
+    env = InsertionEnv(tolins.CircularSocket(2, 4), render_mode="rgb_array")
+    env.reset(seed=0, options={"pose": [0.8, 0.5, 0.05, 1.0]})
+    try:
+        image = env.render()
+    except Exception as error:  # no OpenGL (EGL) on this machine
+        pytest.skip(f"headless OpenGL unavailable: {error}")
+    finally:
+        env.close()
+    assert image.shape == (480, 640, 3) and image.dtype == np.uint8
+    board_green = (image[..., 1] > image[..., 0] + 30) & (image[..., 1] > image[..., 2] + 30)
+    pin_gold = (image[..., 0] > 150) & (image[..., 2] < 100)
+    assert board_green.mean() > 0.1 and pin_gold.sum() > 200

@@ -259,7 +259,7 @@ class InsertionEnv(gym.Env):
 
         if self._renderer is None:
             self._renderer = mujoco.Renderer(self.backend.model, 480, 640)
-        self._renderer.update_scene(self.backend.data)
+        self._renderer.update_scene(self.backend.data, camera="overview")
         return self._renderer.render()
 
     def close(self) -> None:

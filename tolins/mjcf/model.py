@@ -167,6 +167,8 @@ def make_mjcf(spec: SocketSpec) -> str:
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
     extent = float(np.max(np.abs(spec.hole_centers))) + _cell_half_width(spec) + 10.0
+    pin_size = spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius
+    carrier = np.max(np.abs(spec.pin_centers), axis=0) + pin_size + 1.0
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
         f'<mujoco model="tolins_{spec.family}">',
@@ -176,7 +178,8 @@ def make_mjcf(spec: SocketSpec) -> str:
         '<flag multiccd="disable"/>',
         "</option>",
         f'<statistic center="0 0 2" extent="{num(extent)}"/>',
-        '<visual><global offwidth="1280" offheight="960"/></visual>',
+        '<visual><global offwidth="1280" offheight="960"/>'
+        '<headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/></visual>',
         "<default>",
         f'<geom solref="{SOLREF}" solimp="{SOLIMP}" friction="{num(FRICTION)} 0.005 0.0001" '
         'condim="3" margin="0" gap="0"/>',
@@ -193,6 +196,8 @@ def make_mjcf(spec: SocketSpec) -> str:
         "</asset>",
         "<worldbody>",
         '<light name="key" pos="0 -30 60" dir="0 0.5 -1" directional="true"/>',
+        f'<camera name="overview" pos="{nums((0, -1.6 * extent, 1.1 * extent))}" '
+        'xyaxes="1 0 0 0 0.6 0.8"/>',
         *board_body,
         '<body name="workpiece">',
         f'<joint name="x" type="slide" axis="1 0 0" armature="{num(SLIDE_ARMATURE)}"/>',
@@ -201,7 +206,7 @@ def make_mjcf(spec: SocketSpec) -> str:
         f'<joint name="theta" type="hinge" axis="0 0 1" armature="{num(HINGE_ARMATURE)}"/>',
         f'<inertial pos="0 0 {num(PIN_LENGTH + 1)}" mass="0.1" diaginertia="10 10 10"/>',
         f'<geom name="carrier" type="box" pos="0 0 {num(PIN_LENGTH + 1)}" '
-        f'size="{nums((extent - 8, extent - 8, 1))}" contype="0" conaffinity="0" '
+        f'size="{nums((*carrier, 1))}" contype="0" conaffinity="0" '
         'rgba="0.6 0.6 0.65 0.5"/>',
         '<body name="pins">',
         '<inertial pos="0 0 0" mass="0.001" diaginertia="0.001 0.001 0.001"/>',

@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/env_throughput.py            # full run, about a minute on 2 cores
+    python benchmarks/env_throughput.py            # full run, about 90 s on 2 cores
     python benchmarks/env_throughput.py --quick    # a few seconds, a smoke test
     python benchmarks/env_throughput.py --steps 20 --min-time 2
 
@@ -34,7 +34,8 @@ What it measures, all in one run:
    steps each, round-robin, by one thread, then the same envs split into ``--threads``
    disjoint groups stepped concurrently (``ThreadPoolExecutor``; ``mj_step`` releases
    the GIL). Resets are included in both timings here. Best of ``--repeats``.
-   Speed-up = one-thread time / threaded time.
+   Speed-up = one-thread time / threaded time. The same work done by bare MuJoCo loops
+   gives ``bare speed-up``: what the machine allows at that moment.
 
 Targets: env/bare time ratio <= 1.10 everywhere; thread speed-up >= 1.6 (2 threads).
 """
@@ -315,29 +316,61 @@ def step_envs(envs: list[InsertionEnv], case: Case, steps: int) -> None:
                 env.reset(options=options)
 
 
+def step_bare(
+    sims: list[tuple[mujoco.MjModel, mujoco.MjData]],
+    case: Case,
+    steps: int,
+    horizon: int,
+    nstep: int,
+) -> None:
+    """The work of :func:`step_envs` as bare MuJoCo loops: what threads can gain at best."""
+    ctrl = case.action[ACTION_TO_JOINT]
+    for model, data in sims:
+        bare_reset(model, data, case.pose)
+    for k in range(1, steps + 1):
+        for model, data in sims:
+            data.act[:] = data.qpos
+            data.ctrl[:] = ctrl
+            mujoco.mj_step(model, data, nstep=nstep)
+            if k % horizon == 0:
+                bare_reset(model, data, case.pose)
+
+
 def measure_threads(
     case: Case, n_envs: int, n_threads: int, steps: int, repeats: int
-) -> tuple[float, float]:
-    """Best seconds for one thread and for ``n_threads`` threads doing the same work."""
+) -> dict[str, tuple[float, float]]:
+    """Best seconds of one thread and of ``n_threads`` threads doing the same work.
+
+    ``{"env": (one, many), "bare": (one, many)}``; the four runs alternate in each repeat.
+    """
     envs = [make_env(case.socket) for _ in range(n_envs)]
-    groups = [envs[i::n_threads] for i in range(n_threads)]
+    horizon, nstep = envs[0].horizon, envs[0].backend.substeps
+    sims = [(env.backend.model, mujoco.MjData(env.backend.model)) for env in envs]
+    work = {"env": (step_envs, envs, ()), "bare": (step_bare, sims, (horizon, nstep))}
     clock = time.perf_counter
+    best = {(kind, way): math.inf for kind in work for way in ("one", "many")}
     with concurrent.futures.ThreadPoolExecutor(max_workers=n_threads) as pool:
-        # Warm-up: both ways, and starts the pool's threads.
-        step_envs(envs, case, 2)
-        for f in [pool.submit(step_envs, g, case, 2) for g in groups]:
-            f.result()
-        best_one = best_many = math.inf
-        for _ in range(repeats):
-            t0 = clock()
-            step_envs(envs, case, steps)
-            best_one = min(best_one, clock() - t0)
-            t0 = clock()
-            futures = [pool.submit(step_envs, g, case, steps) for g in groups]
-            for f in futures:
+
+        def one(kind: str, n: int) -> None:
+            fn, items, extra = work[kind]
+            fn(items, case, n, *extra)
+
+        def many(kind: str, n: int) -> None:
+            fn, items, extra = work[kind]
+            groups = [items[i::n_threads] for i in range(n_threads)]
+            for f in [pool.submit(fn, g, case, n, *extra) for g in groups]:
                 f.result()
-            best_many = min(best_many, clock() - t0)
-    return best_one, best_many
+
+        for kind in work:  # warm-up; also starts the pool's threads
+            one(kind, 2)
+            many(kind, 2)
+        for _ in range(repeats):
+            for kind in work:
+                for way, run in (("one", one), ("many", many)):
+                    t0 = clock()
+                    run(kind, steps)
+                    best[kind, way] = min(best[kind, way], clock() - t0)
+    return {kind: (best[kind, "one"], best[kind, "many"]) for kind in work}
 
 
 # ---------------------------------------------------------------------------------------
@@ -368,11 +401,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="a few seconds: tiny runs")
     args = parser.parse_args(argv)
     if args.quick:
-        args.steps, args.repeats, args.min_time, args.thread_steps = 4, 1, 0.02, 8
+        args.steps, args.repeats, args.min_time, args.thread_steps = 4, 2, 0.02, 16
     if min(args.steps, args.repeats, args.thread_steps, args.envs, args.threads) < 1:
         parser.error("--steps, --repeats, --thread-steps, --envs and --threads must be >= 1")
 
     start = time.perf_counter()
+    if args.quick:
+        print("--quick: short runs, a smoke test; its figures are rough")
     print(
         f"python {platform.python_version()}, mujoco {mujoco.__version__}, numpy "
         f"{np.__version__}, {os.cpu_count()} CPUs, {platform.processor() or platform.machine()}"
@@ -393,7 +428,8 @@ def main(argv: list[str] | None = None) -> int:
         f"1 thread vs {args.threads} threads (resets included), best of {args.repeats}"
     )
     header = (
-        f"{'regime':<8} {'1 thread st/s':>14} {f'{args.threads} threads st/s':>15} {'speed-up':>9}"
+        f"{'regime':<8} {'1 thread st/s':>14} {f'{args.threads} threads st/s':>15} "
+        f"{'speed-up':>9} {'bare speed-up':>14}"
     )
     print(header)
     print("-" * len(header))
@@ -404,14 +440,21 @@ def main(argv: list[str] | None = None) -> int:
             ("contact", block, PUSH_ACTION),
         ):
             case = Case(name, socket, regime, pose, action)
-            one, many = measure_threads(
-                case, args.envs, args.threads, args.thread_steps, args.repeats
-            )
+            times = measure_threads(case, args.envs, args.threads, args.thread_steps, args.repeats)
+            one, many = times["env"]
+            bare_one, bare_many = times["bare"]
             total = args.envs * args.thread_steps
             speedup = one / many
             speedups.append(speedup)
             flag = " " if speedup >= SPEEDUP_TARGET else "!"
-            print(f"{regime:<8} {total / one:>14.0f} {total / many:>15.0f} {speedup:>8.2f}{flag}")
+            print(
+                f"{regime:<8} {total / one:>14.0f} {total / many:>15.0f} {speedup:>8.2f}{flag} "
+                f"{bare_one / bare_many:>14.2f}"
+            )
+    print(
+        f"bare speed-up: the same work as bare MuJoCo loops, 1 vs {args.threads} threads "
+        "(the ceiling this machine allows)"
+    )
 
     worst = max(r.env / r.bare for r in results)
     worst1 = max(r.cc1 / r.bare for r in results)

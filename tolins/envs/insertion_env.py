@@ -23,6 +23,7 @@ from tolins.paper import (
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
 BACKENDS = {"mujoco": MujocoBackend}
+_A_MIN = -A_MAX
 
 
 def _finite_vector(name: str, value: Any, size: int, allowed: str) -> np.ndarray:
@@ -206,11 +207,11 @@ class InsertionEnv(gym.Env):
             raise ValueError(
                 f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]"
             )
-        if not np.all(np.isfinite(action)):
+        if not np.isfinite(action).all():
             raise ValueError(
                 f"action={action.tolist()!r} contains NaN or inf; allowed: finite values"
             )
-        state = self.backend.step(np.clip(action, -A_MAX, A_MAX))
+        state = self.backend.step(np.minimum(np.maximum(action, _A_MIN), A_MAX))
         self._step += 1
         if state.error is not None:
             info = self._info(collision=False, reward=(0.0, 0.0))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
@@ -54,27 +56,31 @@ class MujocoBackend:
         touch = [self.model.sensor(f"pin{i}_touch").adr[0] for i in range(spec.n_pins)]
         if touch != list(range(touch[0], touch[0] + spec.n_pins)):
             raise RuntimeError("the pins' touch sensors are not stored contiguously")
-        self._touch = slice(touch[0], touch[0] + spec.n_pins)
+        # Views into MjData's buffers (valid for its lifetime): the hot loop reads them
+        # without building new arrays.
+        self._touch = self.data.sensordata[touch[0] : touch[0] + spec.n_pins]
+        self._wrench = self.data.sensordata[self._force : self._force + 3]
+        self._warnings = self.data.warning.number
 
     def _state(self, peak_force: float, error: str | None = None) -> BackendState:
         d = self.data
         theta = d.qpos[3]
-        fx, fy, fz = -d.sensordata[self._force : self._force + 3]
-        c, s = np.cos(theta), np.sin(theta)
-        wrench = np.array([c * fx - s * fy, s * fx + c * fy, -d.sensordata[self._torque + 2], fz])
+        fx, fy, fz = self._wrench.tolist()
+        c, s = math.cos(theta), math.sin(theta)
+        wrench = np.array([s * fy - c * fx, -s * fx - c * fy, -d.sensordata[self._torque + 2], -fz])
         return BackendState(
-            pose=d.qpos[_JOINT_TO_POSE].copy(),
+            pose=d.qpos[_JOINT_TO_POSE],
             wrench=wrench * _FORCE_SCALE,
             peak_force=peak_force,
             error=error,
         )
 
     def _contact_force(self) -> float:
-        return float(self.data.sensordata[self._touch].sum()) * _FORCE_SCALE
+        return float(np.add.reduce(self._touch)) * _FORCE_SCALE
 
     def pin_forces(self) -> np.ndarray:
         """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
-        return self.data.sensordata[self._touch] * _FORCE_SCALE
+        return self._touch * _FORCE_SCALE
 
     def reset(self, pose: np.ndarray) -> BackendState:
         m, d = self.model, self.data
@@ -86,21 +92,20 @@ class MujocoBackend:
 
     def step(self, velocity: np.ndarray) -> BackendState:
         m, d = self.model, self.data
-        warnings_before = int(d.warning.number.sum())
+        warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
         d.ctrl[:] = np.asarray(velocity, dtype=float)[_POSE_TO_JOINT]
         peak = 0.0
         for _ in range(self._checks):
             mujoco.mj_step(m, d, nstep=self._chunk)
-            peak = max(peak, self._contact_force())
-        error = self._fault(warnings_before)
-        return self._state(peak, error)
+            peak = max(peak, float(np.add.reduce(self._touch)))
+        return self._state(peak * _FORCE_SCALE, self._fault(warnings_before))
 
     def _fault(self, warnings_before: int) -> str | None:
         d = self.data
-        if int(d.warning.number.sum()) != warnings_before:
+        if sum(self._warnings.tolist()) != warnings_before:
             raised = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number > 0]
             return f"MuJoCo warning during the step: {', '.join(raised)}"
-        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+        if not math.isfinite(sum(d.qpos.tolist()) + sum(d.qvel.tolist())):
             return "non-finite MuJoCo state"
         return None

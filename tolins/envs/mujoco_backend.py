@@ -76,7 +76,7 @@ class MujocoBackend:
         )
 
     def _contact_force(self) -> float:
-        return float(np.add.reduce(self._touch)) * _FORCE_SCALE
+        return sum(self._touch.tolist()) * _FORCE_SCALE
 
     def pin_forces(self) -> np.ndarray:
         """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
@@ -95,10 +95,10 @@ class MujocoBackend:
         warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
         d.ctrl[:] = np.asarray(velocity, dtype=float)[_POSE_TO_JOINT]
-        peak = 0.0
+        touch, peak = self._touch, 0.0
         for _ in range(self._checks):
             mujoco.mj_step(m, d, nstep=self._chunk)
-            peak = max(peak, float(np.add.reduce(self._touch)))
+            peak = max(peak, sum(touch.tolist()))
         return self._state(peak * _FORCE_SCALE, self._fault(warnings_before))
 
     def _fault(self, warnings_before: int) -> str | None:

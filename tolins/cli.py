@@ -33,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo = commands.add_parser(
         "demo", help="roll out both experts in every preset environment and print a table"
     )
-    demo.add_argument("--episodes", type=_positive_int, default=20, help="episodes per row")
+    demo.add_argument("--episodes", type=_positive_int, default=100, help="episodes per row")
     demo.add_argument("--seed", type=int, default=0, help="seed of the first episode")
     demo.add_argument("--workers", type=_positive_int, default=2, help="threads")
     demo.add_argument("--backend", default="mujoco", choices=["mujoco"], help="simulator")

@@ -8,6 +8,7 @@ import re
 import mujoco
 import numpy as np
 import pytest
+from spec_variants import one_field_variants
 
 from tolins import CircularSocket, PolygonSocket, make_mjcf, sample_defects
 from tolins.geometry import inradius
@@ -63,21 +64,7 @@ def test_equal_specs_built_separately_give_same_bytes() -> None:
 
 
 def test_different_specs_give_different_models() -> None:
-    specs = [
-        CircularSocket(2, 2),
-        CircularSocket(2, 3),
-        CircularSocket(3, 2),
-        CircularSocket(2, 2, pin_radius=0.25),
-        CircularSocket(2, 2, hole_radius=0.55),
-        CircularSocket(2, 2, row_pitch=8.0),
-        CircularSocket(2, 2, col_pitch=3.0),
-        sample_defects(CircularSocket(2, 2), 0.1, rng=0),
-        sample_defects(CircularSocket(2, 2), 0.1, rng=1),
-        PolygonSocket(4, 1.5, 1.65),
-        PolygonSocket(5, 1.5, 1.65),
-        PolygonSocket(4, 1.4, 1.65),
-        PolygonSocket(4, 1.5, 1.7),
-    ]
+    specs = one_field_variants()
     assert len({make_mjcf(spec) for spec in specs}) == len(specs)
 
 

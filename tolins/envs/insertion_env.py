@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 
 from tolins.envs.backend import Backend, BackendState
@@ -12,6 +13,7 @@ from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.defects import sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.geometry.validation import check_int, check_positive
 from tolins.paper import (
     A_MAX,
     COLLISION_REWARD,
@@ -123,15 +125,15 @@ class InsertionEnv(gym.Env):
             raise ValueError(f"socket={socket!r}; allowed: a CircularSocket or PolygonSocket")
         if backend not in BACKENDS:
             raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
-        if defect_sigma is not None and not isinstance(socket, CircularSocket):
-            raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
+        if defect_sigma is not None:
+            if not isinstance(socket, CircularSocket):
+                raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
+            defect_sigma = check_positive("defect_sigma", defect_sigma)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
-        for name, value in (("success_depth", success_depth), ("collision_force", collision_force)):
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name}={value!r}; allowed: a finite number > 0")
-        if int(horizon) != horizon or horizon < 1:
-            raise ValueError(f"horizon={horizon!r}; allowed: an integer ≥ 1")
+        success_depth = check_positive("success_depth", success_depth)
+        collision_force = check_positive("collision_force", collision_force, unit="N")
+        horizon = check_int("horizon", horizon, minimum=1)
         self.nominal_socket = socket
         self.socket = socket
         self.backend_name = backend
@@ -141,14 +143,18 @@ class InsertionEnv(gym.Env):
         self.force_noise = _finite_vector(
             "force_noise", force_noise, 4, "std ≥ 0 for [Fx, Fy, q_theta, Fz]"
         )
-        if np.any(self.measurement_noise < 0) or np.any(self.force_noise < 0):
-            raise ValueError("measurement_noise and force_noise must be ≥ 0")
+        for name, std in (
+            ("measurement_noise", self.measurement_noise),
+            ("force_noise", self.force_noise),
+        ):
+            if np.any(std < 0):
+                raise ValueError(f"{name}={std.tolist()!r} is negative; allowed: std ≥ 0")
         self._noise_std = np.concatenate([self.measurement_noise, self.force_noise])
         self.goal = goal
-        self.horizon = int(horizon)
+        self.horizon = horizon
         self.control_dt = float(control_dt)
-        self.success_depth = float(success_depth)
-        self.collision_force = float(collision_force)
+        self.success_depth = success_depth
+        self.collision_force = collision_force
         self.defect_sigma = defect_sigma
         self.initial_pose = initial_pose or InitialPoseDistribution()
         self.render_mode = render_mode
@@ -256,8 +262,6 @@ class InsertionEnv(gym.Env):
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
             return None
-        import mujoco
-
         if self._renderer is None:
             self._renderer = mujoco.Renderer(self.backend.model, 480, 640)
         self._renderer.update_scene(self.backend.data, camera="overview")

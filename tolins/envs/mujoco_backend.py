@@ -13,9 +13,9 @@ from tolins.mjcf import make_mjcf
 
 #: Model units (mN, µN·m) to the API's N and N·mm.
 _FORCE_SCALE = 1e-3
-#: Pose ``[x, y, theta, z]`` ↔ joint order ``x, y, z, theta`` (qpos, act and ctrl).
-_POSE_TO_JOINT = np.array([0, 1, 3, 2])
-_JOINT_TO_POSE = np.array([0, 1, 3, 2])
+#: Pose ``[x, y, theta, z]`` ↔ joint order ``x, y, z, theta`` (qpos, act and ctrl); the
+#: swap is its own inverse.
+_SWAP_Z_THETA = np.array([0, 1, 3, 2])
 
 
 class MujocoBackend:
@@ -69,7 +69,7 @@ class MujocoBackend:
         c, s = math.cos(theta), math.sin(theta)
         wrench = np.array([s * fy - c * fx, -s * fx - c * fy, -d.sensordata[self._torque + 2], -fz])
         return BackendState(
-            pose=d.qpos[_JOINT_TO_POSE],
+            pose=d.qpos[_SWAP_Z_THETA],
             wrench=wrench * _FORCE_SCALE,
             peak_force=peak_force,
             error=error,
@@ -85,7 +85,7 @@ class MujocoBackend:
     def reset(self, pose: np.ndarray) -> BackendState:
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
-        d.qpos[:] = np.asarray(pose, dtype=float)[_POSE_TO_JOINT]
+        d.qpos[:] = np.asarray(pose, dtype=float)[_SWAP_Z_THETA]
         d.act[:] = d.qpos
         mujoco.mj_forward(m, d)
         return self._state(self._contact_force())
@@ -94,7 +94,7 @@ class MujocoBackend:
         m, d = self.model, self.data
         warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
-        d.ctrl[:] = np.asarray(velocity, dtype=float)[_POSE_TO_JOINT]
+        d.ctrl[:] = np.asarray(velocity, dtype=float)[_SWAP_Z_THETA]
         touch, peak = self._touch, 0.0
         for _ in range(self._checks):
             mujoco.mj_step(m, d, nstep=self._chunk)

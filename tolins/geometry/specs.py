@@ -131,6 +131,11 @@ class CircularSocket:
         return self.pin_offsets is not None and any(dx or dy for dx, dy in self.pin_offsets)
 
     @property
+    def pin_reach(self) -> float:
+        """Radius of the smallest circle about a pin's centre that holds the pin (mm)."""
+        return self.pin_radius
+
+    @property
     def hole_circumradius(self) -> float:
         """Circumradius of the polygon that models each round hole."""
         return self.hole_radius / math.cos(math.pi / CIRCLE_HOLE_SIDES)
@@ -202,6 +207,11 @@ class PolygonSocket:
     @property
     def is_defective(self) -> bool:
         return False
+
+    @property
+    def pin_reach(self) -> float:
+        """Radius of the smallest circle about the peg's centre that holds the peg (mm)."""
+        return self.pin_circumradius
 
     @property
     def hole_centers(self) -> np.ndarray:

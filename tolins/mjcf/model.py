@@ -130,11 +130,12 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
 def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
     """Per pin: a tip site, and a box zone around the pin read by a touch sensor (N summed
     over the pin's contacts, without cancellation)."""
-    size = spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius
     centers = spec.pin_centers
     gaps = np.max(np.abs(centers[:, None] - centers[None]), axis=2)
     gaps[np.diag_indices(len(centers))] = np.inf
-    reach = min(size + 0.2, float(gaps.min()) / 2)  # zones of neighbouring pins never overlap
+    reach = min(
+        spec.pin_reach + 0.2, float(gaps.min()) / 2
+    )  # zones of neighbouring pins never overlap
     zone = nums((reach, reach, PIN_LENGTH / 2 + 0.2))
     sites, sensors = [], []
     for i, (x, y) in enumerate(spec.pin_centers):
@@ -167,8 +168,7 @@ def make_mjcf(spec: SocketSpec) -> str:
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
     extent = float(np.max(np.abs(spec.hole_centers))) + _cell_half_width(spec) + 10.0
-    pin_size = spec.pin_radius if isinstance(spec, CircularSocket) else spec.pin_circumradius
-    carrier = np.max(np.abs(spec.pin_centers), axis=0) + pin_size + 1.0
+    carrier = np.max(np.abs(spec.pin_centers), axis=0) + spec.pin_reach + 1.0
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
         f'<mujoco model="tolins_{spec.family}">',

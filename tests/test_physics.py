@@ -39,12 +39,12 @@ CASES = [
 IDS = [f"{type(s).__name__}{getattr(s, 'sides', '')}-{'xyt'[axis]}" for s, axis, *_ in CASES]
 
 
-def _push_down(socket, pose, steps: int = HORIZON) -> list[dict]:
+def _push_down(socket, pose, steps: int = HORIZON, speed: float = A_MAX[3]) -> list[dict]:
     env = InsertionEnv(socket, measurement_noise=0)
     env.reset(seed=0, options={"pose": pose})
     infos = []
     for _ in range(steps):
-        _, _, terminated, truncated, info = env.step(DOWN)
+        _, _, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
         infos.append(info)
         if terminated or truncated:
             break
@@ -108,3 +108,24 @@ def test_force_and_torque_point_against_the_push() -> None:
     assert info["collision"]
     assert info["wrench"][2] < 0.0
     assert info["pose"][2] == pytest.approx(0.0498, abs=1e-3)
+
+
+# Just beyond the clearance: (socket, axis, geometric limit, how far the pin moves per unit)
+BEYOND = [
+    (CIRCLE, 0, 0.2, 1.0),
+    (CIRCLE, 2, 0.0499, 4.016),  # theta: pins 4.016 mm from the centre
+    (SQUARE, 0, 0.10607, 1.0),
+    (HEXAGON, 0, 0.05196, 1.0),
+]
+
+
+@pytest.mark.parametrize("speed", [A_MAX[3], 0.5])
+@pytest.mark.parametrize(("socket", "axis", "limit", "lever"), BEYOND, ids=lambda v: str(v)[:12])
+def test_pins_5_to_60_um_beyond_the_clearance_are_not_pulled_in(
+    socket, axis, limit, lever, speed
+) -> None:
+    """Contacts resolved sideways at the hole's edge must not ratchet pins into the hole."""
+    for beyond_um in (5, 10, 20, 35, 60):
+        pose = _pose(axis, limit + beyond_um * 1e-3 / lever)
+        last = _push_down(socket, pose, steps=6, speed=speed)[-1]
+        assert not last["success"] and last["pose"][3] > -1e-3, (beyond_um, last["pose"])

@@ -35,8 +35,13 @@ from tolins.mjcf.board import board_boxes, hole_wall_pieces
 from tolins.mjcf.xml import num, nums
 from tolins.paper import A_MAX
 
-#: Physics step (s). Steps of 4 ms or more let pins 10–20 µm outside the clearance slip in.
-TIMESTEP = 0.002
+#: Physics step (s). A pin landing on a hole's edge sinks up to about one step's travel
+#: (2.5 µm at 1 ms and full speed) before the contact holds it; where it overlaps a wall
+#: piece by less than that, the contact resolves sideways and can ratchet it into the
+#: hole. Measured on the 2*2 socket pushed down at 2.5 mm/s: with 2 ms steps (solref
+#: 0.004) pins 7 µm beyond the clearance in x and 35 µm beyond it in rotation went in;
+#: with 1 ms (solref 0.002) 2 µm and 2 µm (see docs/environments.md).
+TIMESTEP = 0.001
 BOARD_THICKNESS = 3.0
 PIN_LENGTH = 4.0
 #: Width (mm) of a hole cell's wall ring when no neighbour limits it.
@@ -51,7 +56,7 @@ HINGE_ARMATURE = 1000.0
 SLIDE_KP = 2.0e5
 HINGE_KP = 2.0e8
 #: Contact parameters (width in mm): stiff, nearly hard contacts with light friction.
-SOLREF = "0.004 1"
+SOLREF = "0.002 1"
 SOLIMP = "0.99 0.999 0.01"
 FRICTION = 0.3
 

@@ -14,7 +14,7 @@ What it measures, all in one run:
 
    * ``env``: ``InsertionEnv(socket, measurement_noise=0).step(action)``;
    * ``bare``: the same model (``env.backend.model``) with a fresh ``mujoco.MjData``, the
-     same start pose and the same controls, one ``mj_step(model, data, nstep=125)`` per
+     same start pose and the same controls, one ``mj_step(model, data, nstep=250)`` per
      control step after re-anchoring the servos (``data.act[:] = data.qpos``), exactly
      what the backend does, minus everything else;
    * ``env cc=1``: the env with its backend replaced by
@@ -274,7 +274,7 @@ def print_results(results: list[Result]) -> None:
             f"{1 / r.cc1:>10.0f} {ratio1:>8.3f}{flag1} {coll:>9} {'yes' if r.match else 'NO':>6}"
         )
     print(
-        "st/s: control steps per second (one control step = 125 physics steps of 2 ms); "
+        "st/s: control steps per second (one control step = 250 physics steps of 1 ms); "
         "env/bare: time ratio;\n"
         "ovh us: env time minus bare time per control step (microseconds); "
         "cc=1: env with MujocoBackend(..., contact_checks=1);\n"

@@ -55,9 +55,15 @@ def test_generic_id_takes_socket_and_backend_kwargs() -> None:
         gym.make(GENERIC_ID, socket=tolins.CircularSocket(3, 2), backend="bullet")
 
 
-@pytest.mark.parametrize("mode", ["sync", "async"])
-def test_make_vec(mode: str) -> None:
-    envs = gym.make_vec("tolins/Square-v0", num_envs=2, vectorization_mode=mode)
+@pytest.mark.parametrize(
+    ("mode", "vector_kwargs"),
+    [("sync", {}), ("async", {}), ("async", {"context": "spawn"})],
+    ids=["sync", "async-fork", "async-spawn"],
+)
+def test_make_vec(mode: str, vector_kwargs: dict) -> None:
+    envs = gym.make_vec(
+        "tolins/Square-v0", num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs
+    )
     try:
         observations, infos = envs.reset(seed=[1, 2])
         assert observations.shape == (2, 8)

@@ -54,7 +54,13 @@ def test_probe_sees_what_a_plain_import_loads() -> None:
 
 
 @pytest.mark.parametrize(
-    "module", ["tolins.geometry", "tolins.geometry.specs", "tolins.geometry.defects"]
+    "module",
+    [
+        "tolins.geometry",
+        "tolins.geometry.specs",
+        "tolins.geometry.defects",
+        "tolins.geometry.tolerance",
+    ],
 )
 def test_geometry_imports_nothing_else_of_tolins(module: str) -> None:
     loaded = _loaded(module)

@@ -11,6 +11,7 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
 
+from tolins import tolerance
 from tolins.envs import register_envs
 from tolins.geometry import CircularSocket, PolygonSocket, sample_defects
 from tolins.mjcf import make_mjcf
@@ -22,4 +23,11 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 register_envs()
 
-__all__ = ["CircularSocket", "PolygonSocket", "__version__", "make_mjcf", "sample_defects"]
+__all__ = [
+    "CircularSocket",
+    "PolygonSocket",
+    "__version__",
+    "make_mjcf",
+    "sample_defects",
+    "tolerance",
+]

@@ -10,6 +10,7 @@ import numpy as np
 
 from tolins.envs.backend import Backend, BackendState
 from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.defects import sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
@@ -24,7 +25,7 @@ from tolins.paper import (
 )
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
-BACKENDS = {"mujoco": MujocoBackend}
+BACKENDS = {"mujoco": MujocoBackend, "kinematic": KinematicBackend}
 _A_MIN = -A_MAX
 
 
@@ -80,6 +81,8 @@ class InsertionEnv(gym.Env):
     (default 0.5 N) at any of the backend's checks during the step (five, evenly
     spaced, on the MuJoCo backend). A sum of normal forces cannot cancel out, so a
     pin wedged by a rotation (zero net force, non-zero torque) is a collision too.
+    The ``kinematic`` backend (the paper's simulator, docs/tolerance.md) reports a
+    binary 1 N when a step stops at a collision.
 
     **Reward** ``reward_success + reward_collision``: ``c (1 - k / k_max)`` with
     c = 100 on the step ``k`` (1-based) that succeeds, and -1 on every step with a

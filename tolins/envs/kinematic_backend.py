@@ -1,0 +1,212 @@
+"""The paper's simulator: straight moves that stop at the first collision.
+
+Without a collision a control step moves the pose ``[x, y, theta, z]`` by
+``velocity · dt``. A pose collides when its pin tips are below the board's top
+(``z < 0``) while ``[x, y, theta]`` is outside the tolerance
+(:func:`tolins.tolerance.contains`). A step that would collide stops at the first
+collision point, the whole motion (sideways components included), as in the paper:
+
+* **board top**: the pins reach ``z = 0`` outside the tolerance (found exactly, the
+  crossing of ``z = 0``); the workpiece stops there with ``z = 0`` and feels
+  ``Fz = +1 N``;
+* **wall**: below the top, the part of the step under the surface is sampled at 16
+  evenly spaced points; between the last free and the first colliding one a binary
+  search of 28 halvings (to 2e-10 of the step) finds the contact; the workpiece feels
+  ``-1 N`` along its blocked horizontal motion and ``-1 N·mm`` against its rotation.
+
+The contact force is binary (:data:`CONTACT_FORCE`, :data:`CONTACT_TORQUE`);
+``peak_force`` is 1 N for a stopped step and 0 otherwise. There is no floor: inserted
+pins go down freely. A collision narrower than a sixteenth of the submerged step
+between two free samples would be missed (a thin sliver of wall; none at these
+clearances and speeds).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from tolins.envs.backend import BackendState
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.tolerance import contains
+from tolins.geometry.validation import check_int
+from tolins.mjcf import make_mjcf
+
+#: The binary contact force (N) and torque (N·mm) of a stopped workpiece.
+CONTACT_FORCE = 1.0
+CONTACT_TORQUE = 1.0
+_SAMPLES = 16
+_BISECTIONS = 28
+_FRACTIONS = np.arange(1, _SAMPLES + 1) / _SAMPLES
+
+
+@dataclass(frozen=True)
+class BatchState:
+    """Workpieces of a :class:`KinematicBatch`: ``pose`` and ``wrench`` ``(n, 4)`` as in
+    :class:`~tolins.envs.backend.BackendState`, ``peak_force`` ``(n,)`` (N)."""
+
+    pose: np.ndarray
+    wrench: np.ndarray
+    peak_force: np.ndarray
+
+
+def colliding(spec: SocketSpec, poses: np.ndarray) -> np.ndarray:
+    """Whether each pose ``[..., 4]`` = ``[x, y, theta, z]`` has a pin inside the board."""
+    below = poses[..., 3] < 0.0
+    return below & ~contains(spec, poses[..., :3])
+
+
+def kinematic_step(
+    spec: SocketSpec, poses: np.ndarray, velocities: np.ndarray, dt: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move collision-free ``poses`` ``(n, 4)`` by ``velocities · dt``, stopping at the first
+    collision. Returns the new poses, the wrenches ``(n, 4)`` and which stopped ``(n,)``."""
+    delta = velocities * dt
+    new = poses + delta
+    wrench = np.zeros_like(poses)
+    stopped = np.zeros(len(poses), dtype=bool)
+    # Only the part of a step below the board's top, [t_in, t_out], can collide.
+    rows = np.flatnonzero(np.minimum(poses[:, 3], new[:, 3]) < 0.0)
+    if rows.size == 0:
+        return new, wrench, stopped
+    z0, dz = poses[rows, 3], delta[rows, 3]
+    crossing = -z0 / np.where(dz != 0.0, dz, 1.0)
+    t_in = np.where(z0 > 0.0, crossing, 0.0)
+    t_out = np.where(dz > 0.0, np.minimum(crossing, 1.0), 1.0)
+    # Landing: the pins reach the board's top outside the tolerance (z0 < 0: inside).
+    landing = poses[rows] + t_in[:, None] * delta[rows]
+    landed = (z0 >= 0.0) & ~contains(spec, landing[:, :3])
+    landing[:, 3] = 0.0
+    new[rows[landed]] = landing[landed]
+    wrench[rows[landed], 3] = CONTACT_FORCE
+    stopped[rows[landed]] = True
+    rows, t_in, t_out = rows[~landed], t_in[~landed], t_out[~landed]
+    if rows.size == 0:
+        return new, wrench, stopped
+    # Walls: the first of _SAMPLES points below the top that collides, then bisection.
+    taus = t_in[:, None] + (t_out - t_in)[:, None] * _FRACTIONS
+    bad = colliding(spec, poses[rows, None, :] + taus[..., None] * delta[rows, None, :])
+    hit = bad.any(axis=1)
+    rows, taus, bad, t_in = rows[hit], taus[hit], bad[hit], t_in[hit]
+    if rows.size == 0:
+        return new, wrench, stopped
+    first = np.argmax(bad, axis=1)
+    index = np.arange(rows.size)
+    lo, hi = np.where(first > 0, taus[index, first - 1], t_in), taus[index, first]
+    start, step = poses[rows], delta[rows]
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        bad = colliding(spec, start + mid[:, None] * step)
+        hi, lo = np.where(bad, mid, hi), np.where(bad, lo, mid)
+    new[rows] = start + lo[:, None] * step
+    wrench[rows] = _wall_wrench(velocities[rows])
+    stopped[rows] = True
+    return new, wrench, stopped
+
+
+def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
+    """Binary wrench of a wall: against the blocked horizontal motion and rotation."""
+    horizontal = velocities[:, :2]
+    speed = np.hypot(horizontal[:, 0], horizontal[:, 1])[:, None]
+    wrench = np.zeros((len(velocities), 4))
+    wrench[:, :2] = -CONTACT_FORCE * np.divide(
+        horizontal, speed, out=np.zeros_like(horizontal), where=speed > 0
+    )
+    wrench[:, 2] = -CONTACT_TORQUE * np.sign(velocities[:, 2])
+    return wrench
+
+
+def _checked(name: str, value: object, shape: tuple[int, ...], allowed: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name}={value!r} is not numeric; allowed: {allowed}") from error
+    if array.shape != shape:
+        raise ValueError(f"{name} has shape {array.shape}; allowed: {shape} = {allowed}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name}={array.tolist()!r} contains NaN or inf; allowed: {allowed}")
+    return array
+
+
+class KinematicBatch:
+    """``n`` workpieces of one socket stepped at once with the kinematic model.
+
+    Args:
+        spec: The socket (every workpiece has the same, defects included).
+        n: Number of workpieces.
+        control_dt: Control period (s).
+    """
+
+    def __init__(self, spec: SocketSpec, n: int, control_dt: float) -> None:
+        self.spec = spec
+        self.n = check_int("n", n, minimum=1)
+        self.control_dt = float(control_dt)
+        self._pose = np.zeros((self.n, 4))
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The current poses ``(n, 4)`` (a copy)."""
+        return self._pose.copy()
+
+    def reset(self, poses: object) -> BatchState:
+        """Place the workpieces at ``poses`` ``(n, 4)``; raises if one is inside the board."""
+        poses = _checked("poses", poses, (self.n, 4), "[x, y, theta, z] per workpiece")
+        inside = colliding(self.spec, poses)
+        if inside.any():
+            row = int(np.argmax(inside))
+            raise ValueError(
+                f"poses[{row}]={poses[row].tolist()!r} puts a pin inside the board; allowed: "
+                "z ≥ 0, or z < 0 with [x, y, theta] in the tolerance"
+            )
+        self._pose = poses.copy()
+        return BatchState(self._pose.copy(), np.zeros((self.n, 4)), np.zeros(self.n))
+
+    def step(self, velocities: object) -> BatchState:
+        """Command ``velocities`` ``(n, 4)`` = ``[ux, uy, utheta, uz]`` for one control period."""
+        velocities = _checked("velocities", velocities, (self.n, 4), "[ux, uy, utheta, uz]")
+        self._pose, wrench, stopped = kinematic_step(
+            self.spec, self._pose, velocities, self.control_dt
+        )
+        return BatchState(self._pose.copy(), wrench, np.where(stopped, CONTACT_FORCE, 0.0))
+
+
+class KinematicBackend:
+    """One workpiece with the kinematic model, behind the :class:`Backend` protocol.
+
+    ``model`` and ``data`` build the MuJoCo model of the socket on first use, for
+    drawing only (``InsertionEnv.render``); they play no part in the motion.
+    """
+
+    def __init__(self, spec: SocketSpec, control_dt: float) -> None:
+        self.spec = spec
+        self._batch = KinematicBatch(spec, 1, control_dt)
+        self._model: mujoco.MjModel | None = None
+        self._data: mujoco.MjData | None = None
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        return self._single(self._batch.reset(np.reshape(pose, (1, 4))))
+
+    def step(self, velocity: np.ndarray) -> BackendState:
+        return self._single(self._batch.step(np.reshape(velocity, (1, 4))))
+
+    @staticmethod
+    def _single(state: BatchState) -> BackendState:
+        return BackendState(state.pose[0], state.wrench[0], float(state.peak_force[0]))
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        if self._model is None:
+            self._model = mujoco.MjModel.from_xml_string(make_mjcf(self.spec))
+            self._data = mujoco.MjData(self._model)
+        return self._model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """MuJoCo data posed at the current pose (forward kinematics only)."""
+        model = self.model
+        for value, joint in zip(self._batch.pose[0], ("x", "y", "theta", "z"), strict=True):
+            self._data.qpos[model.joint(joint).qposadr[0]] = value
+        mujoco.mj_forward(model, self._data)
+        return self._data

@@ -1,4 +1,9 @@
-"""Contact physics: one MuJoCo model of a socket, stepped one control period at a time."""
+"""Contact physics: one MuJoCo model of a socket, stepped one control period at a time.
+
+:class:`ServoStepper` is the control step itself, on any ``MjModel``/``MjData`` pair
+built by :func:`tolins.make_mjcf`; the gymnasium backend (:class:`MujocoBackend`) and
+the dm_control physics (:class:`tolins.dmc.InsertionPhysics`) both step through it.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +14,7 @@ import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import check_int
 from tolins.mjcf import make_mjcf
 
 #: Model units (mN, µN·m) to the API's N and N·mm.
@@ -18,51 +24,62 @@ _FORCE_SCALE = 1e-3
 _SWAP_Z_THETA = np.array([0, 1, 3, 2])
 
 
-class MujocoBackend:
-    """Steps a compiled socket model with re-anchored velocity servos.
+def _touch_sensors(model: mujoco.MjModel) -> tuple[int, int]:
+    """Address and count of the contiguous ``pin{i}_touch`` sensors in ``sensordata``."""
+    addresses = []
+    while True:
+        try:
+            addresses.append(model.sensor(f"pin{len(addresses)}_touch").adr[0])
+        except KeyError:
+            break
+    if not addresses or addresses != list(range(addresses[0], addresses[0] + len(addresses))):
+        raise RuntimeError("the pins' touch sensors are missing or not stored contiguously")
+    return addresses[0], len(addresses)
+
+
+def physics_steps(model: mujoco.MjModel, control_dt: float) -> int:
+    """How many physics steps make one control period; ``ValueError`` if not whole."""
+    substeps = round(control_dt / model.opt.timestep)
+    if substeps < 1 or abs(substeps * model.opt.timestep - control_dt) > 1e-9:
+        raise ValueError(
+            f"control_dt={control_dt!r} is not a whole number of physics steps of "
+            f"{model.opt.timestep} s"
+        )
+    return substeps
+
+
+class ServoStepper:
+    """The control step of a socket model, on a ``MjModel``/``MjData`` pair it does not own.
 
     At the start of every control step each servo's integrated set-point is reset to
     the joint's current position, then the commanded velocity is integrated over the
     step. A blocked workpiece so stops at the first contact and pushes with at most
-    the servo's force limit instead of winding up.
+    the servo's force limit instead of winding up. The summed normal force of the
+    pins' contacts is read ``contact_checks`` times per control step (after evenly
+    sized chunks of physics steps) for ``peak_force``.
 
     Args:
-        spec: The socket.
-        control_dt: Control period (s); a whole number of physics steps.
-        contact_checks: How many times per control step the contact force is read
-            (evenly spaced), for ``peak_force``.
+        model: A model made by :func:`tolins.make_mjcf`.
+        data: Its data; read and written in place.
+        contact_checks: Contact-force reads per control step.
     """
 
-    def __init__(self, spec: SocketSpec, control_dt: float, contact_checks: int = 5) -> None:
-        self.spec = spec
-        self.model = mujoco.MjModel.from_xml_string(make_mjcf(spec))
-        self.data = mujoco.MjData(self.model)
-        substeps = round(control_dt / self.model.opt.timestep)
-        if substeps < 1 or abs(substeps * self.model.opt.timestep - control_dt) > 1e-9:
-            raise ValueError(
-                f"control_dt={control_dt!r} is not a whole number of physics steps of "
-                f"{self.model.opt.timestep} s"
-            )
-        if not 1 <= contact_checks <= substeps or substeps % contact_checks:
-            raise ValueError(
-                f"contact_checks={contact_checks!r} must divide the {substeps} physics "
-                "steps of a control step"
-            )
-        self.substeps = substeps
-        self._chunk = substeps // contact_checks
-        self._checks = contact_checks
-        self._force = self.model.sensor("force").adr[0]
-        self._torque = self.model.sensor("torque").adr[0]
-        touch = [self.model.sensor(f"pin{i}_touch").adr[0] for i in range(spec.n_pins)]
-        if touch != list(range(touch[0], touch[0] + spec.n_pins)):
-            raise RuntimeError("the pins' touch sensors are not stored contiguously")
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, contact_checks: int = 5) -> None:
+        contact_checks = check_int("contact_checks", contact_checks, minimum=1)
+        self.model = model
+        self.data = data
+        self.checks = contact_checks
+        self._force = model.sensor("force").adr[0]
+        self._torque = model.sensor("torque").adr[0]
+        touch, n_pins = _touch_sensors(model)
         # Views into MjData's buffers (valid for its lifetime): the hot loop reads them
         # without building new arrays.
-        self._touch = self.data.sensordata[touch[0] : touch[0] + spec.n_pins]
-        self._wrench = self.data.sensordata[self._force : self._force + 3]
-        self._warnings = self.data.warning.number
+        self._touch = data.sensordata[touch : touch + n_pins]
+        self._wrench = data.sensordata[self._force : self._force + 3]
+        self._warnings = data.warning.number
 
-    def _state(self, peak_force: float, error: str | None = None) -> BackendState:
+    def state(self, peak_force: float, error: str | None = None) -> BackendState:
+        """The workpiece now: pose, wrench (N, N·mm, world axes) and the given peak force."""
         d = self.data
         theta = d.qpos[3]
         fx, fy, fz = self._wrench.tolist()
@@ -75,7 +92,8 @@ class MujocoBackend:
             error=error,
         )
 
-    def _contact_force(self) -> float:
+    def contact_force(self) -> float:
+        """Summed normal contact force on all pins now (N)."""
         return sum(self._touch.tolist()) * _FORCE_SCALE
 
     def pin_forces(self) -> np.ndarray:
@@ -83,23 +101,36 @@ class MujocoBackend:
         return self._touch * _FORCE_SCALE
 
     def reset(self, pose: np.ndarray) -> BackendState:
+        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         d.qpos[:] = np.asarray(pose, dtype=float)[_SWAP_Z_THETA]
         d.act[:] = d.qpos
         mujoco.mj_forward(m, d)
-        return self._state(self._contact_force())
+        return self.state(self.contact_force())
 
-    def step(self, velocity: np.ndarray) -> BackendState:
+    def command(self, velocity: np.ndarray) -> None:
+        """Set the servos' velocity ``[ux, uy, utheta, uz]`` (mm/s, rad/s)."""
+        self.data.ctrl[:] = np.asarray(velocity, dtype=float)[_SWAP_Z_THETA]
+
+    def advance(self, nstep: int) -> BackendState:
+        """Re-anchor the servos and run ``nstep`` physics steps under the current command."""
         m, d = self.model, self.data
         warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
-        d.ctrl[:] = np.asarray(velocity, dtype=float)[_SWAP_Z_THETA]
         touch, peak = self._touch, 0.0
-        for _ in range(self._checks):
-            mujoco.mj_step(m, d, nstep=self._chunk)
-            peak = max(peak, sum(touch.tolist()))
-        return self._state(peak * _FORCE_SCALE, self._fault(warnings_before))
+        chunk, extra = divmod(nstep, self.checks)
+        for i in range(self.checks):
+            n = chunk + (i < extra)
+            if n:
+                mujoco.mj_step(m, d, nstep=n)
+                peak = max(peak, sum(touch.tolist()))
+        return self.state(peak * _FORCE_SCALE, self._fault(warnings_before))
+
+    def step(self, velocity: np.ndarray, nstep: int) -> BackendState:
+        """Command ``velocity`` ``[ux, uy, utheta, uz]`` for ``nstep`` physics steps."""
+        self.command(velocity)
+        return self.advance(nstep)
 
     def _fault(self, warnings_before: int) -> str | None:
         d = self.data
@@ -109,3 +140,37 @@ class MujocoBackend:
         if not math.isfinite(sum(d.qpos.tolist()) + sum(d.qvel.tolist())):
             return "non-finite MuJoCo state"
         return None
+
+
+class MujocoBackend:
+    """The gymnasium env's contact physics: a compiled socket model and its :class:`ServoStepper`.
+
+    Args:
+        spec: The socket.
+        control_dt: Control period (s); a whole number of physics steps.
+        contact_checks: How many times per control step the contact force is read
+            (evenly spaced), for ``peak_force``; must divide the physics steps.
+    """
+
+    def __init__(self, spec: SocketSpec, control_dt: float, contact_checks: int = 5) -> None:
+        self.spec = spec
+        self.model = mujoco.MjModel.from_xml_string(make_mjcf(spec))
+        self.data = mujoco.MjData(self.model)
+        substeps = physics_steps(self.model, control_dt)
+        if not 1 <= contact_checks <= substeps or substeps % contact_checks:
+            raise ValueError(
+                f"contact_checks={contact_checks!r} must divide the {substeps} physics "
+                "steps of a control step"
+            )
+        self.substeps = substeps
+        self.stepper = ServoStepper(self.model, self.data, contact_checks)
+
+    def pin_forces(self) -> np.ndarray:
+        """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
+        return self.stepper.pin_forces()
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        return self.stepper.reset(pose)
+
+    def step(self, velocity: np.ndarray) -> BackendState:
+        return self.stepper.step(velocity, self.substeps)

@@ -1,0 +1,54 @@
+"""``InsertionPhysics``: a dm_control ``Physics`` whose ``step`` is the env's control step."""
+
+from __future__ import annotations
+
+import numpy as np
+from dm_control import mujoco as dm_mujoco
+
+from tolins.envs.backend import BackendState
+from tolins.envs.mujoco_backend import ServoStepper
+from tolins.geometry.specs import SocketSpec
+from tolins.mjcf import make_mjcf
+
+
+class InsertionPhysics(dm_mujoco.Physics):
+    """A socket model (:func:`tolins.make_mjcf`) stepped by the gym backend's :class:`ServoStepper`.
+
+    ``step(nstep)`` is one control step: it re-anchors the servos, runs ``nstep`` physics
+    steps under the velocity last given to :meth:`command`, reading the pins' contact
+    force after each of 5 evenly sized chunks, and stores the result in
+    :attr:`last_state` (a simulator fault is reported there as ``error`` instead of a
+    ``PhysicsError``). ``legacy_step`` is ignored. Everything else, ``named``,
+    ``render``, ``get_state``/``set_state``, is plain dm_control.
+    """
+
+    def _reload_from_data(self, data: dm_mujoco.wrapper.MjData) -> None:
+        super()._reload_from_data(data)
+        self.stepper = ServoStepper(self.model.ptr, self.data.ptr)
+        self.last_state = self.stepper.state(self.stepper.contact_force())
+
+    @classmethod
+    def from_spec(cls, spec: SocketSpec) -> InsertionPhysics:
+        """The physics of ``spec``'s board and workpiece."""
+        return cls.from_xml_string(make_mjcf(spec))
+
+    def reload_from_spec(self, spec: SocketSpec) -> None:
+        """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
+        self.reload_from_xml_string(make_mjcf(spec))
+
+    def set_pose(self, pose: np.ndarray) -> BackendState:
+        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
+        self.last_state = self.stepper.reset(pose)
+        return self.last_state
+
+    def command(self, velocity: np.ndarray) -> None:
+        """Set the velocity ``[ux, uy, utheta, uz]`` (mm/s, rad/s) of the next steps."""
+        self.stepper.command(velocity)
+
+    def step(self, nstep: int = 1) -> None:
+        """One control step of ``nstep`` physics steps (see the class docstring)."""
+        self.last_state = self.stepper.advance(nstep)
+
+    def pose(self) -> np.ndarray:
+        """True pose ``[x, y, theta, z]`` (mm, rad) now."""
+        return self.stepper.state(0.0).pose

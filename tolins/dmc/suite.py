@@ -1,0 +1,95 @@
+"""The dm_control suite of tolins: one domain per preset of the task table, task ``insert``."""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+from dm_control.rl import control
+from dm_control.utils import containers
+
+from tolins.dmc.physics import InsertionPhysics
+from tolins.dmc.task import Insert
+from tolins.envs.tasks import TASKS, Task
+from tolins.paper import CONTROL_DT
+
+TASK_NAME = "insert"
+#: Keywords ``task_kwargs`` may hold: those of :class:`Insert` but the domain's socket.
+TASK_KWARGS = tuple(name for name in inspect.signature(Insert).parameters if name != "socket")
+
+
+def make_environment(
+    task: Task,
+    task_kwargs: dict[str, Any] | None = None,
+    environment_kwargs: dict[str, Any] | None = None,
+) -> control.Environment:
+    """A ``control.Environment`` of ``task`` (a row of the task table), 0.25 s control steps."""
+    task_kwargs = dict(task_kwargs or {})
+    unknown = sorted(set(task_kwargs) - set(TASK_KWARGS))
+    if unknown:
+        raise ValueError(f"task_kwargs {unknown} are unknown; allowed: {list(TASK_KWARGS)}")
+    if task.defect_sigma is not None:
+        task_kwargs.setdefault("defect_sigma", task.defect_sigma)
+    environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
+    physics = InsertionPhysics.from_spec(task.socket)
+    return control.Environment(physics, Insert(task.socket, **task_kwargs), **environment_kwargs)
+
+
+def _domain_suite(task: Task) -> containers.TaggedTasks:
+    """A domain's ``TaggedTasks``: its one task ``insert``, tagged with the table's tags."""
+    suite = containers.TaggedTasks()
+
+    def insert(environment_kwargs: dict[str, Any] | None = None, **task_kwargs: Any):
+        return make_environment(task, task_kwargs, environment_kwargs)
+
+    insert.__doc__ = f"Insert the {task.domain} workpiece (gym id {task.gym_id})."
+    suite.add(*task.tags)(insert)
+    return suite
+
+
+#: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``).
+SUITES: dict[str, containers.TaggedTasks] = {task.domain: _domain_suite(task) for task in TASKS}
+
+
+def get_tasks(tag: str | None = None) -> tuple[tuple[str, str], ...]:
+    """``(domain, task)`` pairs, in the task table's order, having ``tag`` (all if ``None``)."""
+    return tuple(
+        (domain, name)
+        for domain, suite in SUITES.items()
+        for name in (suite if tag is None else suite.tagged(tag))
+    )
+
+
+ALL_TASKS = get_tasks()
+PAPER = get_tasks("paper")
+CIRCLE = get_tasks("circle")
+POLYGON = get_tasks("polygon")
+DEFECTIVE = get_tasks("defective")
+#: Domain -> its task names.
+TASKS_BY_DOMAIN = {domain: tuple(suite) for domain, suite in SUITES.items()}
+
+
+def load(
+    domain_name: str,
+    task_name: str,
+    task_kwargs: dict[str, Any] | None = None,
+    environment_kwargs: dict[str, Any] | None = None,
+) -> control.Environment:
+    """An environment of the suite, like ``dm_control.suite.load``.
+
+    Args:
+        domain_name: One of :data:`TASKS_BY_DOMAIN`, e.g. ``"circle2x2"``.
+        task_name: ``"insert"``.
+        task_kwargs: Keywords of :class:`Insert` (``random`` seed, ``measurement_noise``,
+            ``goal``, ``pose``, ``horizon``, ...).
+        environment_kwargs: Keywords of ``control.Environment`` (``control_timestep``
+            defaults to 0.25 s).
+    """
+    if domain_name not in SUITES:
+        raise ValueError(f"domain_name={domain_name!r} is unknown; allowed: {list(SUITES)}")
+    suite = SUITES[domain_name]
+    if task_name not in suite:
+        raise ValueError(
+            f"task_name={task_name!r} is unknown in domain {domain_name!r}; allowed: {list(suite)}"
+        )
+    return suite[task_name](environment_kwargs=environment_kwargs, **(task_kwargs or {}))

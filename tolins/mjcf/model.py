@@ -61,7 +61,8 @@ SOLIMP = "0.99 0.999 0.01"
 FRICTION = 0.3
 
 
-def _cell_half_width(spec: SocketSpec) -> float:
+def cell_half_width(spec: SocketSpec) -> float:
+    """Half-width (mm) of the square board cell around each hole."""
     if isinstance(spec, PolygonSocket):
         return spec.hole_circumradius + CELL_WALL
     limits = [spec.hole_circumradius + CELL_WALL]
@@ -72,11 +73,16 @@ def _cell_half_width(spec: SocketSpec) -> float:
     return min(limits)
 
 
-def _hole_shape(spec: SocketSpec) -> tuple[int, float]:
+def hole_shape(spec: SocketSpec) -> tuple[int, float]:
     """Sides and circumradius of the polygon that models each hole."""
     if isinstance(spec, CircularSocket):
         return CIRCLE_HOLE_SIDES, spec.hole_circumradius
     return spec.sides, spec.hole_circumradius
+
+
+def carrier_half_size(spec: SocketSpec) -> np.ndarray:
+    """Horizontal half-size ``(2,)`` (mm) of the workpiece's carrier plate over the pins."""
+    return np.max(np.abs(spec.pin_centers), axis=0) + spec.pin_reach + 1.0
 
 
 def _prism_vertices(outline: np.ndarray, z_top: float, z_bottom: float) -> str:
@@ -86,8 +92,8 @@ def _prism_vertices(outline: np.ndarray, z_top: float, z_bottom: float) -> str:
 
 
 def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
-    sides, circumradius = _hole_shape(spec)
-    half_width = _cell_half_width(spec)
+    sides, circumradius = hole_shape(spec)
+    half_width = cell_half_width(spec)
     pieces = hole_wall_pieces(sides, circumradius, half_width)
     assets = [
         f'<mesh name="wall{k}" vertex="{_prism_vertices(p, 0.0, -BOARD_THICKNESS)}"/>'
@@ -172,8 +178,8 @@ def make_mjcf(spec: SocketSpec) -> str:
     board_assets, board_body = _board_xml(spec)
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
-    extent = float(np.max(np.abs(spec.hole_centers))) + _cell_half_width(spec) + 10.0
-    carrier = np.max(np.abs(spec.pin_centers), axis=0) + spec.pin_reach + 1.0
+    extent = float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + 10.0
+    carrier = carrier_half_size(spec)
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
         f'<mujoco model="tolins_{spec.family}">',

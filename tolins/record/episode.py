@@ -1,0 +1,151 @@
+"""One episode buffered per control step and sent as columns at its end (``send_columns``)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import rerun as rr
+
+from tolins.geometry.specs import SocketSpec
+from tolins.record.layout import (
+    FORCE_SCALE,
+    SIM_TIME,
+    STEP,
+    force_path,
+    series_path,
+    workpiece_path,
+)
+from tolins.record.metadata import spec_to_dict
+from tolins.record.scene import log_workpiece
+
+
+@lru_cache(maxsize=64)
+def _spec_json(spec: SocketSpec) -> str:
+    return json.dumps(spec_to_dict(spec))
+
+
+@dataclass
+class EpisodeBuffer:
+    """What the env reported at the reset (row 0) and after each control step.
+
+    ``metadata`` holds the env id, policy name, seed and the episode's socket spec.
+    """
+
+    index: int
+    control_dt: float
+    metadata: dict[str, Any]
+    steps: list[int] = field(default_factory=list)
+    poses: list[np.ndarray] = field(default_factory=list)
+    wrenches: list[np.ndarray] = field(default_factory=list)
+    rewards: list[float] = field(default_factory=list)
+    collisions: list[bool] = field(default_factory=list)
+    successes: list[bool] = field(default_factory=list)
+    events: list[tuple[int, str, str]] = field(default_factory=list)
+
+    def start(self, info: dict[str, Any]) -> None:
+        """Row 0: the state after ``reset``."""
+        self._add_state(info)
+        pose = ", ".join(f"{v:.4g}" for v in info["pose"])
+        self.events.append((info["step"], "INFO", f"start: pose [{pose}], seed {self.seed}"))
+
+    def add(self, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> None:
+        """One control step's outcome, as ``env.step`` returned it."""
+        step = int(info["step"])
+        self._add_state(info)
+        self.rewards.append(float(reward))
+        self.collisions.append(bool(info["collision"]))
+        self.successes.append(bool(info["success"]))
+        if info["collision"]:
+            self.events.append((step, "WARN", f"collision: peak {info['peak_force']:.3g} N"))
+        if "error" in info:
+            self.events.append((step, "ERROR", f"simulator fault: {info['error']}"))
+        if terminated or truncated:
+            outcome = "success" if info["success"] else "truncated without success"
+            self.events.append(
+                (
+                    step,
+                    "INFO" if info["success"] else "WARN",
+                    f"{outcome} at step {step}: return {sum(self.rewards):.4g}, "
+                    f"{info['n_collisions']} collision steps",
+                )
+            )
+
+    @property
+    def seed(self) -> int | None:
+        return self.metadata.get("seed")
+
+    def _add_state(self, info: dict[str, Any]) -> None:
+        self.steps.append(int(info["step"]))
+        self.poses.append(np.array(info["pose"], dtype=float))
+        self.wrenches.append(np.array(info["wrench"], dtype=float))
+
+
+def _indexes(steps: np.ndarray, control_dt: float) -> list[rr.TimeColumn]:
+    return [
+        rr.TimeColumn(STEP, sequence=steps),
+        rr.TimeColumn(SIM_TIME, duration=steps * control_dt),
+    ]
+
+
+def _quaternions(theta: np.ndarray) -> np.ndarray:
+    """Rotations about z as ``xyzw`` quaternions ``(n, 4)``."""
+    zeros = np.zeros_like(theta)
+    return np.column_stack([zeros, zeros, np.sin(theta / 2), np.cos(theta / 2)])
+
+
+def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
+    """Log ``episode``: its static parts, then every buffered column in one call each."""
+    k = episode.index
+    if not episode.steps:
+        raise ValueError(f"episode {k} has no rows; allowed: a buffer started by start()")
+    spec = episode.metadata["spec"]
+    log_workpiece(stream, workpiece_path(k), spec)
+    meta = {key: v for key, v in episode.metadata.items() if key != "spec" and v is not None}
+    stream.log(
+        series_path("metadata", k),
+        rr.AnyValues(**meta, spec=_spec_json(spec)),
+        static=True,
+    )
+
+    steps = np.array(episode.steps, dtype=np.int64)
+    poses = np.array(episode.poses)
+    wrenches = np.array(episode.wrenches)
+    n = len(steps)
+    rows = _indexes(steps, episode.control_dt)
+    position = poses[:, [0, 1, 3]]
+    stream.send_columns(
+        workpiece_path(k),
+        indexes=rows,
+        columns=rr.Transform3D.columns(translation=position, quaternion=_quaternions(poses[:, 2])),
+    )
+    stream.send_columns(
+        force_path(k),
+        indexes=rows,
+        columns=rr.Arrows3D.columns(
+            origins=position,
+            vectors=wrenches[:, [0, 1, 3]] * FORCE_SCALE,
+        ),
+    )
+    for name, values in (("pose", poses), ("wrench", wrenches)):
+        stream.send_columns(
+            series_path(name, k),
+            indexes=rows,
+            columns=rr.Scalars.columns(scalars=values.ravel()).partition(np.full(n, 4)),
+        )
+    if n > 1:
+        outcome = np.column_stack([episode.rewards, episode.collisions, episode.successes])
+        stream.send_columns(
+            series_path("outcome", k),
+            indexes=_indexes(steps[1:], episode.control_dt),
+            columns=rr.Scalars.columns(scalars=outcome.ravel()).partition(np.full(n - 1, 3)),
+        )
+    ev_steps, levels, texts = zip(*episode.events, strict=True)
+    stream.send_columns(
+        series_path("events", k),
+        indexes=_indexes(np.array(ev_steps, dtype=np.int64), episode.control_dt),
+        columns=rr.TextLog.columns(text=list(texts), level=list(levels)),
+    )

@@ -1,0 +1,82 @@
+"""Where things live in a tolins recording: entity paths, timelines and the default layout.
+
+Static (logged once per file): ``/world`` (z up, mm) and the board under
+``/world/board/{walls,boxes,holes}``. Per episode ``k`` (``episode_{k:03d}``), so that
+several episodes in one file stay separable:
+
+=================================  ==========================================
+``/world/{ep}/workpiece``          pose per step (``Transform3D``); pins and
+                                   carrier below it, static, in its frame
+``/world/{ep}/force``              contact force on the workpiece (arrow)
+``/pose/{ep}``                     ``[x, y, theta, z]`` (mm, rad), float64
+``/wrench/{ep}``                   ``[Fx, Fy, q_theta, Fz]`` (N, N·mm)
+``/outcome/{ep}``                  ``[reward, collision, success]`` per step
+                                   (steps ≥ 1; collision and success 0 or 1)
+``/events/{ep}``                   start, collision, success, end (text log)
+``/metadata/{ep}``                 env id, spec, seed, policy (static)
+=================================  ==========================================
+
+Timelines: ``step`` (control steps, 0 = reset) and ``sim_time`` (``step * control_dt`` s).
+"""
+
+from __future__ import annotations
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+STEP = "step"
+SIM_TIME = "sim_time"
+WORLD = "/world"
+BOARD = "/world/board"
+#: Arrow length per newton of contact force (mm/N).
+FORCE_SCALE = 2.0
+FORCE_COLOR = (220, 60, 50)
+POSE_NAMES = ["x (mm)", "y (mm)", "theta (rad)", "z (mm)"]
+WRENCH_NAMES = ["Fx (N)", "Fy (N)", "q_theta (N·mm)", "Fz (N)"]
+OUTCOME_NAMES = ["reward", "collision", "success"]
+
+
+def episode_name(index: int) -> str:
+    """``episode_007`` for ``index`` 7."""
+    if index < 0:
+        raise ValueError(f"episode index={index!r}; allowed: ≥ 0")
+    return f"episode_{index:03d}"
+
+
+def workpiece_path(index: int) -> str:
+    return f"{WORLD}/{episode_name(index)}/workpiece"
+
+
+def force_path(index: int) -> str:
+    return f"{WORLD}/{episode_name(index)}/force"
+
+
+def series_path(quantity: str, index: int) -> str:
+    """``/{quantity}/episode_{index:03d}`` for pose, wrench, reward, collision, success,
+    events and metadata."""
+    return f"/{quantity}/{episode_name(index)}"
+
+
+def default_blueprint() -> rrb.Blueprint:
+    """The 3-D scene beside the plots and the event log, on the ``step`` timeline."""
+    plots = rrb.Vertical(
+        *(
+            rrb.TimeSeriesView(
+                origin=f"/{quantity}", name=quantity, defaults=[rr.SeriesLines(names=names)]
+            )
+            for quantity, names in (
+                ("pose", POSE_NAMES),
+                ("wrench", WRENCH_NAMES),
+                ("outcome", OUTCOME_NAMES),
+            )
+        ),
+        rrb.TextLogView(origin="/events", name="events"),
+    )
+    scene = rrb.Spatial3DView(
+        origin=WORLD, name="socket (mm)", defaults=[rr.Arrows3D.from_fields(colors=FORCE_COLOR)]
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(scene, plots, column_shares=[3, 2]),
+        rrb.TimePanel(timeline=STEP),
+        collapse_panels=True,
+    )

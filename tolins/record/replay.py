@@ -1,0 +1,148 @@
+"""Replay a recording: check the file, then hand it to the viewer that ships with rerun-sdk.
+
+Three ways: the native viewer, the web viewer served on 127.0.0.1, or a headless
+screenshot (software Vulkan: Debian's ``mesa-vulkan-drivers``, see ``scripts/setup.sh``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+from urllib.parse import quote
+
+from rerun.chunk import RrdReader
+
+LOOPBACK = "127.0.0.1"
+#: Screenshot size in logical points.
+WINDOW_SIZE = "1280x800"
+SCREENSHOT_TIMEOUT_S = 180.0
+
+
+class RrdError(ValueError):
+    """A file that is missing or is not a readable rerun recording."""
+
+
+def check_rrd(path: str | os.PathLike[str]) -> int:
+    """Decode every chunk of ``path``; return the number of chunks.
+
+    Raises:
+        RrdError: one line naming the file and what is wrong with it.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise RrdError(f"{path}: no such file")
+    if not path.is_file():
+        raise RrdError(f"{path}: not a file")
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            reader = RrdReader(path)
+            if not reader.recordings():
+                raise RrdError(f"{path}: holds no recording")
+            chunks = sum(1 for _ in reader.stream())
+    except RrdError:
+        raise
+    except (RuntimeError, ValueError, OSError) as error:
+        detail = str(error).splitlines()[0] if str(error) else type(error).__name__
+        detail = detail.split(f"{path}: ", 1)[-1]
+        raise RrdError(f"{path}: not a readable .rrd recording ({detail})") from error
+    if any("no footer" in str(w.message) for w in caught):
+        raise RrdError(f"{path}: incomplete .rrd recording (no footer: truncated or still open)")
+    return chunks
+
+
+def rerun_command() -> list[str]:
+    """The ``rerun`` executable beside this Python, else ``python -m rerun_cli``."""
+    beside = Path(sys.executable).with_name("rerun")
+    if beside.is_file():
+        return [str(beside)]
+    return [sys.executable, "-m", "rerun_cli"]
+
+
+def web_address(web_port: int, grpc_port: int) -> str:
+    """The address of the web viewer showing the recording served on ``grpc_port``."""
+    proxy = quote(f"rerun+http://{LOOPBACK}:{grpc_port}/proxy", safe="")
+    return f"http://{LOOPBACK}:{web_port}/?url={proxy}"
+
+
+def viewer_args(
+    path: Path,
+    *,
+    web: bool = False,
+    screenshot: Path | None = None,
+    web_port: int = 9090,
+    grpc_port: int = 9876,
+) -> list[str]:
+    """Arguments of ``rerun`` for one of the three ways to replay ``path``."""
+    if web and screenshot is not None:
+        raise ValueError("web and screenshot are both set; allowed: at most one")
+    args = [str(path), "--bind", LOOPBACK, "--hide-welcome-screen"]
+    if web:
+        return [*args, "--web-viewer", "--web-viewer-port", str(web_port), "--port", str(grpc_port)]
+    if screenshot is not None:
+        return [
+            *args,
+            *("--headless", "--screenshot-to", str(screenshot)),
+            *("--window-size", WINDOW_SIZE, "--port", "auto"),
+        ]
+    return [*args, "--port", "auto"]
+
+
+def _temporary_beside(path: Path) -> Path:
+    return path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+
+
+def take_screenshot(path: Path, out: Path, *, timeout: float = SCREENSHOT_TIMEOUT_S) -> None:
+    """Render ``path`` headless to the PNG ``out`` (written atomically).
+
+    Raises:
+        RuntimeError: the viewer could not render (e.g. no Vulkan driver).
+    """
+    if out.suffix.lower() != ".png":
+        raise ValueError(f"screenshot={str(out)!r}; allowed: a path ending in .png")
+    if not out.parent.is_dir():
+        raise ValueError(f"screenshot={str(out)!r}: folder {out.parent} does not exist")
+    tmp = _temporary_beside(out)
+    command = [*rerun_command(), *viewer_args(path, screenshot=tmp)]
+    try:
+        result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+        if result.returncode != 0 or not tmp.is_file():
+            lines = [ln for ln in result.stderr.splitlines() if "panicked" in ln or "rror" in ln]
+            hint = lines[0].strip() if lines else f"exit status {result.returncode}"
+            raise RuntimeError(
+                f"{path}: headless rendering failed ({hint}); it needs a Vulkan driver, "
+                "e.g. Debian's mesa-vulkan-drivers (scripts/setup.sh installs it)"
+            )
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def replay(
+    path: str | os.PathLike[str],
+    *,
+    web: bool = False,
+    screenshot: str | os.PathLike[str] | None = None,
+    web_port: int = 9090,
+    grpc_port: int = 9876,
+) -> int:
+    """Check ``path`` and show it; returns the viewer's exit status.
+
+    The native viewer and the web server run until closed (Ctrl-C); a screenshot returns
+    once the PNG is written.
+    """
+    path = Path(path)
+    check_rrd(path)
+    if screenshot is not None:
+        take_screenshot(path, Path(screenshot))
+        return 0
+    if web:
+        print(f"web viewer: {web_address(web_port, grpc_port)}  (Ctrl-C to stop)", flush=True)
+    args = viewer_args(path, web=web, web_port=web_port, grpc_port=grpc_port)
+    try:
+        return subprocess.call([*rerun_command(), *args])
+    except KeyboardInterrupt:
+        return 130

@@ -1,0 +1,89 @@
+"""Log the static geometry: the board once per file, the workpiece once per episode."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import rerun as rr
+
+from tolins.geometry.specs import SocketSpec
+from tolins.record.geometry import board_geometry, carrier_box, pin_geometry
+from tolins.record.layout import BOARD, WORLD
+
+BOARD_COLOR = (64, 115, 77)
+HOLE_COLOR = (20, 30, 25)
+PIN_COLOR = (217, 179, 77)
+CARRIER_COLOR = (153, 153, 166, 110)
+
+
+def log_board(stream: rr.RecordingStream, spec: SocketSpec) -> None:
+    """The world frame (z up, mm) and ``spec``'s board, static."""
+    board = board_geometry(spec)
+    stream.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    stream.log(
+        f"{BOARD}/walls",
+        rr.Mesh3D(
+            vertex_positions=board.walls.vertices,
+            triangle_indices=board.walls.triangles,
+            albedo_factor=BOARD_COLOR,
+        ),
+        static=True,
+    )
+    stream.log(
+        f"{BOARD}/boxes",
+        rr.Boxes3D(
+            centers=board.boxes.centers,
+            half_sizes=board.boxes.half_sizes,
+            colors=BOARD_COLOR,
+            fill_mode="solid",
+        ),
+        static=True,
+    )
+    stream.log(
+        f"{BOARD}/holes",
+        rr.LineStrips3D(board.hole_outlines, colors=HOLE_COLOR, radii=0.01),
+        static=True,
+    )
+
+
+@lru_cache(maxsize=64)
+def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsComponents]:
+    """The pins and the carrier of ``spec`` (built once per spec: episodes share them)."""
+    pins = pin_geometry(spec)
+    if pins.cylinders is not None:
+        centers, radius = pins.cylinders
+        archetype = rr.Cylinders3D(
+            centers=centers,
+            lengths=[2 * centers[0, 2]] * len(centers),
+            radii=[radius] * len(centers),
+            colors=PIN_COLOR,
+            fill_mode="solid",
+        )
+    elif pins.box is not None:
+        archetype = rr.Boxes3D(
+            centers=pins.box.centers,
+            half_sizes=pins.box.half_sizes,
+            colors=PIN_COLOR,
+            fill_mode="solid",
+        )
+    else:
+        archetype = rr.Mesh3D(
+            vertex_positions=pins.mesh.vertices,
+            triangle_indices=pins.mesh.triangles,
+            albedo_factor=PIN_COLOR,
+        )
+    carrier = carrier_box(spec)
+    carrier_archetype = rr.Boxes3D(
+        centers=carrier.centers,
+        half_sizes=carrier.half_sizes,
+        colors=CARRIER_COLOR,
+        fill_mode="solid",
+    )
+    return archetype, carrier_archetype
+
+
+def log_workpiece(stream: rr.RecordingStream, path: str, spec: SocketSpec) -> None:
+    """``spec``'s pins and carrier under the workpiece entity ``path``, static."""
+    pins, carrier = workpiece_archetypes(spec)
+    stream.log(f"{path}/pins", pins, static=True)
+    stream.log(f"{path}/carrier", carrier, static=True)

@@ -118,7 +118,7 @@ def test_an_int_seed_replays_the_gym_envs_episodes(domain: str, task: str) -> No
             assert timestep.last() == (terminated or truncated)
             if timestep.last():
                 break
-        assert env.task.n_collisions == info["n_collisions"]
+        assert env.task.score.collisions == info["n_collisions"]
     assert info["n_collisions"] > 0  # the actions did reach the board
 
 
@@ -141,8 +141,8 @@ def test_same_pose_and_actions_give_the_gym_envs_physical_outcome(socket, domain
         assert timestep.last() == (terminated or truncated)
         assert np.array_equal(env.physics.pose(), info["pose"])
         assert np.array_equal(timestep.observation["wrench"], info["wrench"])
-        assert env.task.collision == info["collision"]
-        assert env.task.n_collisions == info["n_collisions"]
+        assert env.task.last_score.collision == info["collision"]
+        assert env.task.score.collisions == info["n_collisions"]
         assert timestep.reward == reward
         if timestep.last():
             break
@@ -156,7 +156,7 @@ def test_success_ends_the_episode_with_the_papers_reward_and_discount_0() -> Non
     assert [s.step_type for s in steps] == [StepType.MID] * 3 + [StepType.LAST]
     assert steps[-1].discount == 0.0
     assert steps[-1].reward == pytest.approx(SUCCESS_REWARD * (1 - 4 / HORIZON))
-    assert env.task.success and env.task.n_collisions == 0
+    assert env.task.last_score.success and env.task.score.collisions == 0
     assert env.step(DOWN).first()
 
 

@@ -10,13 +10,11 @@ from dm_control.rl import control
 from dm_env import specs
 
 from tolins.dmc.physics import InsertionPhysics
-from tolins.envs.backend import BackendState
+from tolins.envs.episode import NO_SCORE, EpisodeScore, TaskSettings, check_action
 from tolins.envs.initial_pose import InitialPoseDistribution
-from tolins.envs.insertion_env import _finite_vector
-from tolins.geometry.defects import sample_defects
-from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
-from tolins.geometry.validation import check_int, check_positive
-from tolins.paper import A_MAX, COLLISION_REWARD, HORIZON, POSE_NOISE_STD, SUCCESS_REWARD
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import finite_vector
+from tolins.paper import A_MAX, HORIZON, POSE_NOISE_STD
 
 #: Observation names and sizes, in the order of the gym env's 8-vector.
 OBSERVATIONS = (("pose_error", 3), ("height", 1), ("wrench", 4))
@@ -79,90 +77,52 @@ class Insert(control.Task):
         collision_force: float = 0.5,
         random: Any = None,
     ) -> None:
-        if not isinstance(socket, (CircularSocket, PolygonSocket)):
-            raise ValueError(f"socket={socket!r}; allowed: a CircularSocket or PolygonSocket")
-        if defect_sigma is not None:
-            if not isinstance(socket, CircularSocket):
-                raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
-            defect_sigma = check_positive("defect_sigma", defect_sigma)
-        noise = {
-            "measurement_noise": _finite_vector(
-                "measurement_noise", measurement_noise, 4, "std ≥ 0 for [x, y, theta, z]"
-            ),
-            "force_noise": _finite_vector(
-                "force_noise", force_noise, 4, "std ≥ 0 for [Fx, Fy, q_theta, Fz]"
-            ),
-        }
-        for name, std in noise.items():
-            if np.any(std < 0):
-                raise ValueError(f"{name}={std.tolist()!r} is negative; allowed: std ≥ 0")
-        self.nominal_socket = self.socket = socket
-        self.defect_sigma = defect_sigma
-        self.noise_std = np.concatenate(list(noise.values()))
-        self.goal = _finite_vector("goal", goal, 3, "[x*, y*, theta*] in mm and rad")
-        self.pose = None if pose is None else _finite_vector("pose", pose, 4, "[x, y, θ, z]")
-        self.initial_pose = initial_pose or InitialPoseDistribution()
-        self.horizon = check_int("horizon", horizon, minimum=1)
-        self.success_depth = check_positive("success_depth", success_depth)
-        self.collision_force = check_positive("collision_force", collision_force, unit="N")
+        self.settings = TaskSettings(
+            socket,
+            measurement_noise=measurement_noise,
+            force_noise=force_noise,
+            horizon=horizon,
+            success_depth=success_depth,
+            collision_force=collision_force,
+            defect_sigma=defect_sigma,
+            initial_pose=initial_pose,
+        )
+        self.socket = socket
+        self.goal = finite_vector("goal", goal, 3, "[x*, y*, theta*] in mm and rad")
+        self.pose = None if pose is None else finite_vector("pose", pose, 4, "[x, y, θ, z]")
         self.random = _generator(random)
-        self._observation = np.zeros(8)
-        self._begin_episode()
-
-    def _begin_episode(self) -> None:
-        self.step_count = 0
-        self.n_collisions = 0
-        self.collision = False
-        self.success = False
+        self.score = EpisodeScore(self.settings)
+        self.last_score = NO_SCORE
         self.error: str | None = None
-        self.reward_terms = (0.0, 0.0)
+        self._observation = np.zeros(8)
+        super().__init__()
 
     def initialize_episode(self, physics: InsertionPhysics) -> None:
         """Draw the workpiece (defective domain) and the initial pose; place the workpiece."""
-        if self.defect_sigma is not None:
-            self.socket = sample_defects(self.nominal_socket, self.defect_sigma, self.random)
+        if self.settings.defect_sigma is not None:
+            self.socket = self.settings.draw_socket(self.random)
             physics.reload_from_spec(self.socket)
         if self.pose is not None:
             pose = self.pose
         else:
-            pose = self.initial_pose.sample(self.random, self.goal)
-        self._begin_episode()
-        self._observation = self._observe(physics.set_pose(pose))
+            pose = self.settings.initial_pose.sample(self.random, self.goal)
+        self.score.reset()
+        self.last_score, self.error = NO_SCORE, None
+        self._observation = self.settings.observe(physics.set_pose(pose), self.goal, self.random)
 
     def before_step(self, action: Any, physics: InsertionPhysics) -> None:
         """Check and clip ``action`` and command it."""
-        try:
-            action = np.asarray(action, dtype=float)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action={action!r} is not numeric; allowed: 4 floats") from error
-        if action.shape != (4,) or not np.isfinite(action).all():
-            raise ValueError(
-                f"action={action.tolist()!r}; allowed: 4 finite floats [ux, uy, utheta, uz]"
-            )
-        physics.command(np.minimum(np.maximum(action, -A_MAX), A_MAX))
+        physics.command(check_action(action))
 
     def after_step(self, physics: InsertionPhysics) -> None:
         """Score the control step that ``physics.step`` just ran."""
-        state: BackendState = physics.last_state
-        self.step_count += 1
+        state = physics.last_state
         if state.error is not None:
             self.error = state.error
-            self.collision = self.success = False
-            self.reward_terms = (0.0, 0.0)
+            self.last_score = self.score.fault()
             return
-        self.collision = state.peak_force > self.collision_force
-        self.n_collisions += int(self.collision)
-        self.success = bool(state.pose[3] <= -self.success_depth)
-        k = self.step_count
-        self.reward_terms = (
-            SUCCESS_REWARD * (1 - k / self.horizon) if self.success else 0.0,
-            COLLISION_REWARD if self.collision else 0.0,
-        )
-        self._observation = self._observe(state)
-
-    def _observe(self, state: BackendState) -> np.ndarray:
-        exact = np.concatenate([state.pose[:3] - self.goal, state.pose[3:], state.wrench])
-        return exact + self.random.normal(0.0, 1.0, 8) * self.noise_std
+        self.last_score = self.score.score(state)
+        self._observation = self.settings.observe(state, self.goal, self.random)
 
     def get_observation(self, physics: InsertionPhysics) -> Observation:
         """The last observation, split into ``pose_error``, ``height`` and ``wrench``."""
@@ -172,12 +132,12 @@ class Insert(control.Task):
         )
 
     def get_reward(self, physics: InsertionPhysics) -> float:
-        return self.reward_terms[0] + self.reward_terms[1]
+        return self.last_score.reward
 
     def get_termination(self, physics: InsertionPhysics) -> float | None:
-        if self.success:
+        if self.last_score.success:
             return 0.0
-        if self.error is not None or self.step_count >= self.horizon:
+        if self.last_score.truncated:
             return 1.0
         return None
 

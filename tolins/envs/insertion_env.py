@@ -9,37 +9,21 @@ import mujoco
 import numpy as np
 
 from tolins.envs.backend import Backend, BackendState
+from tolins.envs.episode import NO_SCORE, EpisodeScore, StepScore, TaskSettings, check_action
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
-from tolins.geometry.defects import sample_defects
-from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
-from tolins.geometry.validation import check_int, check_positive
-from tolins.paper import (
-    A_MAX,
-    COLLISION_REWARD,
-    CONTROL_DT,
-    HORIZON,
-    POSE_NOISE_STD,
-    SUCCESS_REWARD,
-)
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import finite_vector
+from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
 BACKENDS = {"mujoco": MujocoBackend, "kinematic": KinematicBackend}
-_A_MIN = -A_MAX
 
 
-def _finite_vector(name: str, value: Any, size: int, allowed: str) -> np.ndarray:
-    """``value`` as a float array of ``size`` finite entries (a scalar is broadcast)."""
-    try:
-        array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy()
-    except (TypeError, ValueError) as error:
-        raise ValueError(
-            f"{name}={value!r} has the wrong shape or type; allowed: {allowed}"
-        ) from error
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}={value!r} contains NaN or inf; allowed: {allowed}")
-    return array
+def _setting(name: str) -> property:
+    """A read-only attribute of the env's ``TaskSettings``."""
+    return property(lambda self: getattr(self.settings, name), doc=f"See ``TaskSettings.{name}``.")
 
 
 class InsertionEnv(gym.Env):
@@ -124,51 +108,41 @@ class InsertionEnv(gym.Env):
         initial_pose: InitialPoseDistribution | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if not isinstance(socket, (CircularSocket, PolygonSocket)):
-            raise ValueError(f"socket={socket!r}; allowed: a CircularSocket or PolygonSocket")
         if backend not in BACKENDS:
             raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
-        if defect_sigma is not None:
-            if not isinstance(socket, CircularSocket):
-                raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
-            defect_sigma = check_positive("defect_sigma", defect_sigma)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
-        success_depth = check_positive("success_depth", success_depth)
-        collision_force = check_positive("collision_force", collision_force, unit="N")
-        horizon = check_int("horizon", horizon, minimum=1)
-        self.nominal_socket = socket
+        self.settings = TaskSettings(
+            socket,
+            measurement_noise=measurement_noise,
+            force_noise=force_noise,
+            horizon=horizon,
+            success_depth=success_depth,
+            collision_force=collision_force,
+            defect_sigma=defect_sigma,
+            initial_pose=initial_pose,
+        )
         self.socket = socket
         self.backend_name = backend
-        self.measurement_noise = _finite_vector(
-            "measurement_noise", measurement_noise, 4, "std ≥ 0 for [x, y, theta, z]"
-        )
-        self.force_noise = _finite_vector(
-            "force_noise", force_noise, 4, "std ≥ 0 for [Fx, Fy, q_theta, Fz]"
-        )
-        for name, std in (
-            ("measurement_noise", self.measurement_noise),
-            ("force_noise", self.force_noise),
-        ):
-            if np.any(std < 0):
-                raise ValueError(f"{name}={std.tolist()!r} is negative; allowed: std ≥ 0")
-        self._noise_std = np.concatenate([self.measurement_noise, self.force_noise])
         self.goal = goal
-        self.horizon = horizon
         self.control_dt = float(control_dt)
-        self.success_depth = success_depth
-        self.collision_force = collision_force
-        self.defect_sigma = defect_sigma
-        self.initial_pose = initial_pose or InitialPoseDistribution()
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
         self.backend: Backend = BACKENDS[backend](socket, self.control_dt)
+        self._score = EpisodeScore(self.settings)
         self._state: BackendState | None = None
         self._observation = np.zeros(8)
-        self._step = 0
-        self._n_collisions = 0
         self._renderer = None
+
+    nominal_socket = _setting("socket")
+    measurement_noise = _setting("measurement_noise")
+    force_noise = _setting("force_noise")
+    horizon = _setting("horizon")
+    success_depth = _setting("success_depth")
+    collision_force = _setting("collision_force")
+    defect_sigma = _setting("defect_sigma")
+    initial_pose = _setting("initial_pose")
 
     @property
     def goal(self) -> np.ndarray:
@@ -177,7 +151,7 @@ class InsertionEnv(gym.Env):
 
     @goal.setter
     def goal(self, value: Any) -> None:
-        self._goal = _finite_vector("goal", value, 3, "[x*, y*, theta*] in mm and rad")
+        self._goal = finite_vector("goal", value, 3, "[x*, y*, theta*] in mm and rad")
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -192,74 +166,47 @@ class InsertionEnv(gym.Env):
         if "goal" in options:
             self.goal = options["goal"]
         if self.defect_sigma is not None:
-            self.socket = sample_defects(self.nominal_socket, self.defect_sigma, self.np_random)
+            self.socket = self.settings.draw_socket(self.np_random)
             self.backend = BACKENDS[self.backend_name](self.socket, self.control_dt)
             self.close()
         if "pose" in options:
-            pose = _finite_vector("options['pose']", options["pose"], 4, "[x, y, theta, z]")
+            pose = finite_vector("options['pose']", options["pose"], 4, "[x, y, theta, z]")
         else:
             pose = self.initial_pose.sample(self.np_random, self._goal)
         self._state = self.backend.reset(pose)
-        self._step = 0
-        self._n_collisions = 0
-        self._observation = self._observe(self._state)
-        return self._observation.copy(), self._info(collision=False, reward=(0.0, 0.0))
+        self._score.reset()
+        self._observation = self.settings.observe(self._state, self._goal, self.np_random)
+        return self._observation.copy(), self._info(NO_SCORE)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._state is None:
             raise RuntimeError("step() called before reset()")
-        try:
-            action = np.asarray(action, dtype=float)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action={action!r} is not numeric; allowed: 4 floats") from error
-        if action.shape != (4,):
-            raise ValueError(
-                f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]"
-            )
-        if not np.isfinite(action).all():
-            raise ValueError(
-                f"action={action.tolist()!r} contains NaN or inf; allowed: finite values"
-            )
-        state = self.backend.step(np.minimum(np.maximum(action, _A_MIN), A_MAX))
-        self._step += 1
+        state = self.backend.step(check_action(action))
         if state.error is not None:
-            info = self._info(collision=False, reward=(0.0, 0.0))
+            info = self._info(self._score.fault())
             info["error"] = state.error
             return self._observation.copy(), 0.0, False, True, info
         self._state = state
-        collision = state.peak_force > self.collision_force
-        self._n_collisions += int(collision)
-        success = self._success(state)
-        reward_success = SUCCESS_REWARD * (1 - self._step / self.horizon) if success else 0.0
-        reward_collision = COLLISION_REWARD if collision else 0.0
-        self._observation = self._observe(state)
-        truncated = not success and self._step >= self.horizon
-        info = self._info(collision=collision, reward=(reward_success, reward_collision))
-        return self._observation.copy(), reward_success + reward_collision, success, truncated, info
+        score = self._score.score(state)
+        self._observation = self.settings.observe(state, self._goal, self.np_random)
+        info = self._info(score)
+        return self._observation.copy(), score.reward, score.success, score.truncated, info
 
-    def _success(self, state: BackendState) -> bool:
-        return bool(state.pose[3] <= -self.success_depth)
-
-    def _observe(self, state: BackendState) -> np.ndarray:
-        exact = np.concatenate([state.pose[:3] - self._goal, state.pose[3:], state.wrench])
-        noise = self.np_random.normal(0.0, 1.0, 8) * self._noise_std
-        return exact + noise
-
-    def _info(self, *, collision: bool, reward: tuple[float, float]) -> dict[str, Any]:
+    def _info(self, score: StepScore) -> dict[str, Any]:
         state = self._state
-        success = self._success(state)
+        success = self.settings.is_success(state)
         return {
             "success": success,
             "is_success": success,
-            "collision": collision,
-            "n_collisions": self._n_collisions,
+            "collision": score.collision,
+            "n_collisions": self._score.collisions,
             "pose": state.pose.copy(),
             "wrench": state.wrench.copy(),
             "peak_force": state.peak_force,
-            "step": self._step,
+            "step": self._score.steps,
             "goal": self._goal.copy(),
-            "reward_success": reward[0],
-            "reward_collision": reward[1],
+            "reward_success": score.reward_success,
+            "reward_collision": score.reward_collision,
         }
 
     def render(self) -> np.ndarray | None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from numbers import Integral, Real
 
+import numpy as np
+
 
 def check_int(field: str, value: object, *, minimum: int) -> int:
     """Return ``value`` as an int if it is an integer ≥ ``minimum``."""
@@ -23,3 +25,16 @@ def check_positive(field: str, value: object, unit: str = "mm") -> float:
     if not math.isfinite(value) or value <= 0.0:
         raise ValueError(f"{field}={value!r} is not allowed; allowed: a finite number > 0 {unit}")
     return value
+
+
+def finite_vector(field: str, value: object, size: int, allowed: str) -> np.ndarray:
+    """``value`` as a float array of ``size`` finite entries (a scalar is broadcast)."""
+    try:
+        array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy()
+    except (TypeError, ValueError) as error:
+        raise ValueError(
+            f"{field}={value!r} has a wrong shape or type; allowed: {allowed}"
+        ) from error
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{field}={value!r} contains NaN or inf; allowed: {allowed}")
+    return array

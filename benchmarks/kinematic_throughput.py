@@ -10,9 +10,9 @@ steps ``--steps`` control steps (40 = one episode) from a reset, in three regime
 
 * ``free``: in the air (``z`` 15–18 mm), random actions: no step checks collisions;
 * ``landing``: 0.05 mm above the board beside the holes (0.5 mm off for circles, 0.3 mm
-  for polygons), pushing down at full speed: every step stops on the board's top;
+  for polygons), pushing down at full speed: every step lands on the board's top;
 * ``wall``: inserted (``z = -0.5`` mm) at the goal, moving at full speed in x and theta:
-  every step stops at a hole's wall, found by sampling and binary search (the worst case);
+  every step meets a hole's wall, found by sampling and binary search (the worst case);
 * ``expert``: the paper's episode, initial poses from ``InitialPoseDistribution`` and the
   efficient expert's action on the true pose (computed for the whole batch with NumPy,
   included in the time), so free flight, landing and insertion mix.
@@ -99,7 +99,7 @@ def main() -> None:
         f"Python {platform.python_version()}, NumPy {np.__version__}, {platform.machine()}; "
         f"batch {args.batch}, {args.steps} steps per block, best of {repeats}, one core"
     )
-    print("| socket  | regime  |    steps/s | µs per batch step | stopped steps |")
+    print("| socket  | regime  |    steps/s | µs per batch step | colliding steps |")
     print("|---------|---------|-----------:|------------------:|--------------:|")
     for name, socket in SOCKETS.items():
         for regime in ("free", "landing", "wall", "expert"):

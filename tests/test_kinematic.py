@@ -13,7 +13,8 @@ import tolins
 from tolins.envs import GENERIC_ID, TASKS, InsertionEnv
 from tolins.envs.kinematic_backend import KinematicBackend, KinematicBatch
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON
-from tolins.tolerance import extents
+from tolins.policies.experts import EfficientExpert
+from tolins.tolerance import contains, extents
 
 CIRCLE = tolins.CircularSocket(2, 2)
 SQUARE = tolins.PolygonSocket(4, 1.5, 1.65)
@@ -66,30 +67,66 @@ def test_inside_the_clearance_descends_and_outside_stops_on_the_top(socket, axis
         assert infos[-1]["n_collisions"] == 4 and infos[-1]["reward_collision"] == -1.0
 
 
-def test_a_diagonal_descent_stops_where_it_meets_the_top() -> None:
-    """The end of the step is inside the clearance; the pins meet the top before it."""
+def test_a_diagonal_descent_lands_on_the_top_and_slides() -> None:
+    """The pins meet the top outside the clearance at 0.4 mm; x goes on along the top."""
     backend = KinematicBackend(CIRCLE, CONTROL_DT)
     backend.reset(np.array([0.5, 0.0, 0.0, 0.1]))
     state = backend.step(np.array([-A_MAX[0], 0.0, 0.0, -A_MAX[3]]))  # 0.625 mm each
-    assert state.pose == pytest.approx([0.4, 0.0, 0.0, 0.0], abs=1e-12)
-    assert state.peak_force == 1.0 and state.wrench[3] == 1.0
+    assert np.array_equal(state.pose, [0.5 - 0.625, 0.0, 0.0, 0.0])
+    assert state.peak_force == 1.0 and np.array_equal(state.wrench, [0.0, 0.0, 0.0, 1.0])
+    state = backend.step(np.array(DOWN))  # now over the holes: in, freely
+    assert np.array_equal(state.pose, [-0.125, 0.0, 0.0, -0.625]) and state.peak_force == 0.0
 
 
-def test_walls_stop_an_inserted_workpiece_at_the_clearance() -> None:
-    backend = KinematicBackend(CIRCLE, CONTROL_DT)
-    start = np.array([0.0, 0.0, 0.0, -0.5])
-    backend.reset(start)
-    state = backend.step(np.array([A_MAX[0], 0.0, 0.0, -A_MAX[3]]))
+@pytest.mark.parametrize("socket", [CIRCLE, SQUARE, HEXAGON, TRIANGLE], ids=repr)
+def test_landing_beside_the_hole_slides_over_it_then_descends(socket) -> None:
+    env = InsertionEnv(socket, backend="kinematic", measurement_noise=0)
+    start = np.array([0.6, -0.4, 0.02, 0.05])
+    env.reset(seed=0, options={"pose": start})
+    *_, info = env.step(DOWN)  # lands beside the hole
+    assert np.array_equal(info["pose"], [*start[:3], 0.0]) and info["collision"]
+    pose = info["pose"]
+    for velocity in ([-1.2, 0.8, 0.0, -A_MAX[3]], [-1.2, 0.8, -0.08, -A_MAX[3]]):
+        *_, info = env.step(velocity)  # still beside: slides on the top by the whole step
+        expected = pose + np.array(velocity) * CONTROL_DT
+        assert np.array_equal(info["pose"][:3], expected[:3]) and info["pose"][3] == 0.0
+        assert info["collision"] and np.array_equal(info["wrench"], [0, 0, 0, 1.0])
+        pose = info["pose"]
+    assert np.allclose(pose[:3], 0.0, atol=1e-15)  # over the hole, on the top
+    assert info["n_collisions"] == 3
+    for _ in range(4):
+        *_, terminated, _, info = env.step(DOWN)
+        assert not info["collision"]
+    assert terminated and info["success"] and info["n_collisions"] == 3
+
+
+def test_pushing_into_a_wall_while_descending_still_descends() -> None:
+    env = InsertionEnv(CIRCLE, backend="kinematic", measurement_noise=0)
+    env.reset(seed=0, options={"pose": [0.15, 0.0, 0.0, -0.1]})
+    for k in range(1, 4):
+        *_, terminated, _, info = env.step([A_MAX[0], 0.0, A_MAX[2], -A_MAX[3]])
+        assert info["collision"] and info["n_collisions"] == k
+        assert np.array_equal(info["wrench"], [-1.0, 0.0, -1.0, 0.0])
+        assert info["pose"][3] == -0.1 - k * 0.625  # z is not blocked by the wall
+        beyond = info["pose"][:3] + np.array([1e-8, 0.0, 0.0])
+        assert contains(CIRCLE, info["pose"][:3]) and not contains(CIRCLE, beyond)  # at the wall
+    assert terminated and info["success"]
+    backend = KinematicBackend(CIRCLE, CONTROL_DT)  # ascending against a wall
+    backend.reset(np.array([0.15, 0.0, 0.0, -0.5]))
+    state = backend.step(np.array([A_MAX[0], 0.0, 0.0, A_MAX[3]]))
     assert state.pose[0] == pytest.approx(0.2, abs=SEARCH_TOLERANCE) and state.pose[0] <= 0.2
-    assert state.pose[3] == pytest.approx(-0.5 - 0.2, abs=SEARCH_TOLERANCE)
-    assert np.array_equal(state.wrench, [-1.0, 0.0, 0.0, 0.0]) and state.peak_force == 1.0
-    backend.reset(start)
-    for _ in range(3):  # 0.025 rad per step against a 0.0498 rad clearance
-        state = backend.step(np.array([0.0, 0.0, A_MAX[2], 0.0]))
-    assert state.pose[2] == pytest.approx(extents(CIRCLE).theta[1], abs=SEARCH_TOLERANCE)
-    assert np.array_equal(state.wrench, [0.0, 0.0, -1.0, 0.0])
-    state = backend.step(np.array([0.0, 0.0, -A_MAX[2], 0.0]))  # back out: free again
-    assert state.peak_force == 0.0 and not state.wrench.any()
+    assert state.pose[3] == -0.5 + 0.625 and state.peak_force == 1.0
+
+
+def test_the_efficient_expert_slides_in_from_beside_the_hole() -> None:
+    env = InsertionEnv(CIRCLE, backend="kinematic", measurement_noise=0)
+    expert = EfficientExpert()
+    observation, _ = env.reset(seed=0, options={"pose": [2.0, -1.5, 0.05, 1.0]})
+    for _ in range(HORIZON):
+        observation, _, terminated, truncated, info = env.step(expert(observation))
+        if terminated or truncated:
+            break
+    assert info["success"] and info["n_collisions"] >= 1
 
 
 def test_free_motion_is_exactly_velocity_times_dt() -> None:
@@ -131,16 +168,21 @@ def test_same_seed_same_trajectory(gym_id: str) -> None:
 
 @pytest.mark.parametrize("socket", [CIRCLE, tolins.CircularSocket(2, 8), HEXAGON], ids=repr)
 def test_batch_agrees_with_single_backends(socket) -> None:
-    n, rng = 48, np.random.default_rng(0)
+    """Random walks in the air, on the top (landing, sliding) and in the holes (walls)."""
+    n, rng = 60, np.random.default_rng(0)
     limits = extents(socket)
     scale = np.array([limits.x[1], limits.y[1], limits.theta[1]])
     starts = np.column_stack([rng.normal(0, 1, (n, 3)) * scale, rng.uniform(0, 1, n)])
+    starts[:12, 3] = 0.0  # on the top, most of them beside the holes
+    starts[12:24, :3] = rng.uniform(-0.3, 0.3, (12, 3)) * scale
+    starts[12:24, 3] = -rng.uniform(0.0, 0.5, 12)  # in the holes
     batch = KinematicBatch(socket, n, CONTROL_DT)
     singles = [KinematicBackend(socket, CONTROL_DT) for _ in range(n)]
     batch.reset(starts)
     for single, start in zip(singles, starts, strict=True):
         single.reset(start)
-    stops = 0
+    top_slides = wall_descents = 0
+    previous = starts
     for _ in range(20):
         sideways = rng.uniform(-1, 1, (n, 3)) * scale / CONTROL_DT * 0.3
         velocities = np.column_stack([sideways, rng.uniform(-A_MAX[3], 0.5, n)])
@@ -150,8 +192,14 @@ def test_batch_agrees_with_single_backends(socket) -> None:
             np.testing.assert_allclose(state.pose[i], expected.pose, rtol=0, atol=1e-12)
             assert np.array_equal(state.wrench[i], expected.wrench)
             assert state.peak_force[i] == expected.peak_force
-        stops += int(np.count_nonzero(state.peak_force))
-    assert stops > 50 and np.any(state.pose[:, 3] < -1.0)  # both stops and insertions
+        on_top = (state.peak_force > 0) & (state.wrench[:, 3] > 0)
+        moved = np.any(state.pose[:, :3] != previous[:, :3], axis=1)
+        assert np.all(state.pose[on_top, 3] == 0.0)
+        top_slides += int(np.count_nonzero(on_top & moved))
+        at_wall = (state.peak_force > 0) & (state.wrench[:, 3] == 0)
+        wall_descents += int(np.count_nonzero(at_wall & (state.pose[:, 3] < previous[:, 3])))
+        previous = state.pose
+    assert top_slides > 200 and wall_descents > 50 and np.any(state.pose[:, 3] < -1.0)
 
 
 def test_env_on_the_batch_matches_the_env() -> None:

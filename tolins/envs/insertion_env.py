@@ -66,7 +66,8 @@ class InsertionEnv(gym.Env):
     spaced, on the MuJoCo backend). A sum of normal forces cannot cancel out, so a
     pin wedged by a rotation (zero net force, non-zero torque) is a collision too.
     The ``kinematic`` backend (the paper's simulator, docs/tolerance.md) reports a
-    binary 1 N when a step stops at a collision.
+    binary 1 N on a step that collides (the motion into the obstacle stops, the rest of
+    the step slides along it).
 
     **Reward** ``reward_success + reward_collision``: ``c (1 - k / k_max)`` with
     c = 100 on the step ``k`` (1-based) that succeeds, and -1 on every step with a

@@ -1,24 +1,32 @@
-"""The paper's simulator: straight moves that stop at the first collision.
+"""The paper's simulator: straight moves that stop at the first collision, then slide.
 
 Without a collision a control step moves the pose ``[x, y, theta, z]`` by
-``velocity · dt``. A pose collides when its pin tips are below the board's top
+``delta = velocity · dt``. A pose collides when its pin tips are below the board's top
 (``z < 0``) while ``[x, y, theta]`` is outside the tolerance
-(:func:`tolins.tolerance.contains`). A step that would collide stops at the first
-collision point, the whole motion (sideways components included), as in the paper:
+(:func:`tolins.tolerance.contains`). A step that would collide moves to the first
+collision point (step fraction ``tau``) and there loses only the blocked components of
+its motion; the rest of the step, the fraction ``1 - tau``, continues without them:
 
 * **board top**: the pins reach ``z = 0`` outside the tolerance (found exactly, the
-  crossing of ``z = 0``); the workpiece stops there with ``z = 0`` and feels
-  ``Fz = +1 N``;
+  crossing of ``z = 0``). The top blocks ``z``: the workpiece ends the step at ``z = 0``
+  with ``x, y, theta`` moved by the whole commanded ``delta`` (sliding on the top is
+  free, ``z = 0`` being touching, not colliding), and feels ``Fz = +1 N``. A slide that
+  brings the pins over their holes does not descend in the same step; the next step
+  does.
 * **wall**: below the top, the part of the step under the surface is sampled at 16
   evenly spaced points; between the last free and the first colliding one a binary
-  search of 28 halvings (to 2e-10 of the step) finds the contact; the workpiece feels
-  ``-1 N`` along its blocked horizontal motion and ``-1 N·mm`` against its rotation.
+  search of 28 halvings (to 2e-10 of the step) finds the contact ``tau``. A wall blocks
+  ``x, y, theta``: they stay at the contact, while ``z`` continues by the rest of the
+  step (``z`` ends at ``z + delta_z`` as in free motion; descending or ascending with
+  ``x, y, theta`` at a free pose cannot collide). The workpiece feels ``-1 N`` along its
+  blocked horizontal motion and ``-1 N·mm`` against its rotation. An ascending step
+  that leaves the hole after a wall contact ends at the contact's ``x, y, theta``.
 
 The contact force is binary (:data:`CONTACT_FORCE`, :data:`CONTACT_TORQUE`);
-``peak_force`` is 1 N for a stopped step and 0 otherwise. There is no floor: inserted
-pins go down freely. A collision narrower than a sixteenth of the submerged step
-between two free samples would be missed (a thin sliver of wall; none at these
-clearances and speeds).
+``peak_force`` is 1 N for a step with a collision (top or wall) and 0 otherwise. There
+is no floor: inserted pins go down freely. A collision narrower than a sixteenth of the
+submerged step between two free samples would be missed (a thin sliver of wall; none
+at these clearances and speeds).
 """
 
 from __future__ import annotations
@@ -34,7 +42,7 @@ from tolins.geometry.tolerance import contains
 from tolins.geometry.validation import check_int
 from tolins.mjcf import make_mjcf
 
-#: The binary contact force (N) and torque (N·mm) of a stopped workpiece.
+#: The binary contact force (N) and torque (N·mm) of a colliding workpiece.
 CONTACT_FORCE = 1.0
 CONTACT_TORQUE = 1.0
 _SAMPLES = 16
@@ -61,37 +69,38 @@ def colliding(spec: SocketSpec, poses: np.ndarray) -> np.ndarray:
 def kinematic_step(
     spec: SocketSpec, poses: np.ndarray, velocities: np.ndarray, dt: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Move collision-free ``poses`` ``(n, 4)`` by ``velocities · dt``, stopping at the first
-    collision. Returns the new poses, the wrenches ``(n, 4)`` and which stopped ``(n,)``."""
+    """Move collision-free ``poses`` ``(n, 4)`` by ``velocities · dt``; at the first collision
+    drop the blocked components and slide on (module docstring). Returns the new poses,
+    the wrenches ``(n, 4)`` and which collided ``(n,)``."""
     delta = velocities * dt
     new = poses + delta
     wrench = np.zeros_like(poses)
-    stopped = np.zeros(len(poses), dtype=bool)
+    collided = np.zeros(len(poses), dtype=bool)
     # Only the part of a step below the board's top, [t_in, t_out], can collide.
     rows = np.flatnonzero(np.minimum(poses[:, 3], new[:, 3]) < 0.0)
     if rows.size == 0:
-        return new, wrench, stopped
+        return new, wrench, collided
     z0, dz = poses[rows, 3], delta[rows, 3]
     crossing = -z0 / np.where(dz != 0.0, dz, 1.0)
     t_in = np.where(z0 > 0.0, crossing, 0.0)
     t_out = np.where(dz > 0.0, np.minimum(crossing, 1.0), 1.0)
     # Landing: the pins reach the board's top outside the tolerance (z0 < 0: inside).
-    landing = poses[rows] + t_in[:, None] * delta[rows]
-    landed = (z0 >= 0.0) & ~contains(spec, landing[:, :3])
-    landing[:, 3] = 0.0
-    new[rows[landed]] = landing[landed]
+    # The top blocks z; x, y, theta slide on by the whole step (free at z = 0).
+    landing = poses[rows, :3] + t_in[:, None] * delta[rows, :3]
+    landed = (z0 >= 0.0) & ~contains(spec, landing)
+    new[rows[landed], 3] = 0.0
     wrench[rows[landed], 3] = CONTACT_FORCE
-    stopped[rows[landed]] = True
+    collided[rows[landed]] = True
     rows, t_in, t_out = rows[~landed], t_in[~landed], t_out[~landed]
     if rows.size == 0:
-        return new, wrench, stopped
+        return new, wrench, collided
     # Walls: the first of _SAMPLES points below the top that collides, then bisection.
     taus = t_in[:, None] + (t_out - t_in)[:, None] * _FRACTIONS
     bad = colliding(spec, poses[rows, None, :] + taus[..., None] * delta[rows, None, :])
     hit = bad.any(axis=1)
     rows, taus, bad, t_in = rows[hit], taus[hit], bad[hit], t_in[hit]
     if rows.size == 0:
-        return new, wrench, stopped
+        return new, wrench, collided
     first = np.argmax(bad, axis=1)
     index = np.arange(rows.size)
     lo, hi = np.where(first > 0, taus[index, first - 1], t_in), taus[index, first]
@@ -100,10 +109,11 @@ def kinematic_step(
         mid = 0.5 * (lo + hi)
         bad = colliding(spec, start + mid[:, None] * step)
         hi, lo = np.where(bad, mid, hi), np.where(bad, lo, mid)
-    new[rows] = start + lo[:, None] * step
+    # A wall blocks x, y, theta at the contact; z goes on by the whole step.
+    new[rows, :3] = start[:, :3] + lo[:, None] * step[:, :3]
     wrench[rows] = _wall_wrench(velocities[rows])
-    stopped[rows] = True
-    return new, wrench, stopped
+    collided[rows] = True
+    return new, wrench, collided
 
 
 def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
@@ -166,10 +176,10 @@ class KinematicBatch:
     def step(self, velocities: object) -> BatchState:
         """Command ``velocities`` ``(n, 4)`` = ``[ux, uy, utheta, uz]`` for one control period."""
         velocities = _checked("velocities", velocities, (self.n, 4), "[ux, uy, utheta, uz]")
-        self._pose, wrench, stopped = kinematic_step(
+        self._pose, wrench, collided = kinematic_step(
             self.spec, self._pose, velocities, self.control_dt
         )
-        return BatchState(self._pose.copy(), wrench, np.where(stopped, CONTACT_FORCE, 0.0))
+        return BatchState(self._pose.copy(), wrench, np.where(collided, CONTACT_FORCE, 0.0))
 
 
 class KinematicBackend:

@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
+import socket
 import subprocess
 import sys
+import time
+import urllib.request
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -112,7 +117,9 @@ def test_geometry_is_logged_once_and_matches_the_model(recording: tuple) -> None
     board = board_geometry(socket)
     walls = tables["/world/board/walls#static"]
     assert len(walls["Mesh3D:vertex_positions"]) == 1  # once per file
-    assert len(walls["Mesh3D:vertex_positions"][0]) == len(board.walls.vertices)
+    logged = np.array(walls["Mesh3D:vertex_positions"][0])
+    assert len(logged) == 3 * len(board.walls.triangles)  # flat shaded: vertices per face
+    np.testing.assert_array_equal(_rounded(logged), _rounded(board.walls.vertices))
     holes = tables["/world/board/holes#static"]["LineStrips3D:strips"][0]
     assert len(holes) == socket.n_pins
     boxes = tables["/world/board/boxes#static"]
@@ -163,6 +170,23 @@ def test_episodes_are_separable_with_their_metadata(recording: tuple) -> None:
     assert not any("episode_002" in entity for entity in tables)
     properties = tables["/__properties/tolins#static"]
     assert properties["env_id"] == [[env_id]]
+
+
+def test_bent_pins_are_logged_per_episode(tmp_path: Path) -> None:
+    path = tmp_path / "bent.rrd"
+    env = gym.make("tolins/Circle2x1Defective-v0")
+    record_episodes(env, SafeExpert(), 2, path, seed=0)
+    tables = _read(path)
+    centers = []
+    for k in range(2):
+        spec = spec_from_dict(json.loads(tables[f"/metadata/episode_{k:03d}#static"]["spec"][0][0]))
+        assert spec.is_defective
+        pins = np.array(
+            tables[f"/world/episode_{k:03d}/workpiece/pins#static"]["Cylinders3D:centers"][0]
+        )
+        np.testing.assert_allclose(pins[:, :2], spec.pin_centers, atol=1e-6)
+        centers.append(pins)
+    assert not np.allclose(centers[0], centers[1])
 
 
 def test_rerun_rrd_verify_accepts_the_file(recording: tuple) -> None:
@@ -220,6 +244,51 @@ def test_replay_rejects_missing_and_corrupt_files(
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and str(path) in err and what in err, err
         assert "Traceback" not in err
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def test_web_replay_serves_on_loopback_and_prints_the_address(recording: tuple) -> None:
+    _, path, _, _ = recording
+    web, grpc = _free_port(), _free_port()
+    command = [sys.executable, "-m", "tolins.cli", "replay", str(path), "--web"]
+    process = subprocess.Popen(
+        [*command, "--port", str(web), "--grpc-port", str(grpc)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        start_new_session=True,  # its own process group: the viewer server ends with it
+    )
+    try:
+        line = process.stdout.readline()
+        assert f"http://127.0.0.1:{web}/?url=" in line, line
+        for _ in range(100):
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=2) as reply:
+                    assert reply.status == 200
+                    break
+            except OSError:
+                time.sleep(0.1)
+        else:
+            pytest.fail(f"nothing served on 127.0.0.1:{web}")
+    finally:
+        os.killpg(process.pid, signal.SIGTERM)
+        process.wait(timeout=10)
+
+
+def test_native_replay_without_a_display_says_so(
+    recording: tuple, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _, path, _, _ = recording
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr(sys, "platform", "linux")
+    assert main(["replay", str(path)]) == 1
+    assert "no display" in capsys.readouterr().err
 
 
 def test_record_cli_writes_a_verified_file(tmp_path: Path, capsys) -> None:

@@ -79,6 +79,17 @@ def prism_mesh(outline: np.ndarray, z_bottom: float, z_top: float) -> TriangleMe
     return TriangleMesh(np.concatenate([top, bottom]), np.concatenate(triangles))
 
 
+def flat_shaded(mesh: TriangleMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(vertices, triangles, normals)`` with each triangle's own vertices and face
+    normals, so a viewer shades every face flat (shared vertices would smooth the edges)."""
+    vertices = mesh.vertices[mesh.triangles].reshape(-1, 3)
+    corners = mesh.vertices[mesh.triangles]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    triangles = np.arange(len(vertices)).reshape(-1, 3)
+    return vertices, triangles, np.repeat(normals, 3, axis=0)
+
+
 def merge_meshes(meshes: list[TriangleMesh]) -> TriangleMesh:
     """One mesh holding all of ``meshes``."""
     if not meshes:
@@ -122,6 +133,11 @@ def pin_geometry(spec: SocketSpec) -> PinGeometry:
         )
     outline = polygon_vertices(spec.sides, spec.pin_circumradius)
     return PinGeometry(mesh=prism_mesh(outline, 0.0, PIN_LENGTH))
+
+
+def scene_extent(spec: SocketSpec) -> float:
+    """Half-size (mm) of the scene around the board, as the MJCF's ``<statistic extent>``."""
+    return float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + 10.0
 
 
 def carrier_box(spec: SocketSpec) -> BoxSet:

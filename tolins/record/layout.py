@@ -57,8 +57,13 @@ def series_path(quantity: str, index: int) -> str:
     return f"/{quantity}/{episode_name(index)}"
 
 
-def default_blueprint() -> rrb.Blueprint:
-    """The 3-D scene beside the plots and the event log, on the ``step`` timeline."""
+def default_blueprint(extent: float | None = None) -> rrb.Blueprint:
+    """The 3-D scene beside the plots and the event log, on the ``step`` timeline.
+
+    ``extent`` (mm), the board's half-size, places the camera in front of and above the
+    socket, looking down at it (as the MJCF's ``overview`` camera); ``None`` lets the
+    viewer choose.
+    """
     plots = rrb.Vertical(
         *(
             rrb.TimeSeriesView(
@@ -72,8 +77,18 @@ def default_blueprint() -> rrb.Blueprint:
         ),
         rrb.TextLogView(origin="/events", name="events"),
     )
+    eye = None
+    if extent is not None:
+        eye = rrb.EyeControls3D(
+            position=(0.0, -2.4 * extent, 1.2 * extent + 10.0),
+            look_target=(0.0, 0.0, 8.0),
+            eye_up=(0.0, 0.0, 1.0),
+        )
     scene = rrb.Spatial3DView(
-        origin=WORLD, name="socket (mm)", defaults=[rr.Arrows3D.from_fields(colors=FORCE_COLOR)]
+        origin=WORLD,
+        name="socket (mm)",
+        defaults=[rr.Arrows3D.from_fields(colors=FORCE_COLOR)],
+        eye_controls=eye,
     )
     return rrb.Blueprint(
         rrb.Horizontal(scene, plots, column_shares=[3, 2]),

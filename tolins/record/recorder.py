@@ -11,9 +11,11 @@ from typing import Any
 
 import gymnasium as gym
 import rerun as rr
+import rerun.blueprint as rrb
 
 from tolins.envs.insertion_env import InsertionEnv
 from tolins.record.episode import EpisodeBuffer, send_episode
+from tolins.record.geometry import scene_extent
 from tolins.record.layout import default_blueprint
 from tolins.record.metadata import spec_to_dict
 from tolins.record.scene import log_board
@@ -41,11 +43,13 @@ class RrdFile:
     completes it and renames it onto ``path`` (``os.replace``), :meth:`abort` deletes it.
     """
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
+    def __init__(
+        self, path: str | os.PathLike[str], blueprint: rrb.Blueprint | None = None
+    ) -> None:
         self.path = check_output_path(path)
         self._tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
         self.stream = rr.RecordingStream(APPLICATION_ID)
-        self.stream.save(self._tmp, default_blueprint=default_blueprint())
+        self.stream.save(self._tmp, default_blueprint=blueprint or default_blueprint())
         self._open = True
 
     def commit(self) -> None:
@@ -98,7 +102,8 @@ class RerunRecorder(gym.Wrapper):
         if isinstance(target, rr.RecordingStream):
             self._file, self.stream = None, target
         else:
-            self._file = RrdFile(target)
+            extent = scene_extent(env.unwrapped.nominal_socket)
+            self._file = RrdFile(target, default_blueprint(extent))
             self.stream = self._file.stream
         self._episode: EpisodeBuffer | None = None
         self._sender = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tolins-record")
@@ -139,6 +144,7 @@ class RerunRecorder(gym.Wrapper):
         self._wait_for_sends()
         if self._file is not None:
             self._file.commit()
+            self._sender.shutdown()  # the file is complete: nothing more to send
         else:
             self.stream.flush()
 
@@ -150,6 +156,7 @@ class RerunRecorder(gym.Wrapper):
         finally:
             if self._file is not None:
                 self._file.abort()
+                self._sender.shutdown()
 
     def close(self) -> None:
         try:

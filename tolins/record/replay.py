@@ -121,6 +121,10 @@ def take_screenshot(path: Path, out: Path, *, timeout: float = SCREENSHOT_TIMEOU
         tmp.unlink(missing_ok=True)
 
 
+def _has_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def replay(
     path: str | os.PathLike[str],
     *,
@@ -141,6 +145,11 @@ def replay(
         return 0
     if web:
         print(f"web viewer: {web_address(web_port, grpc_port)}  (Ctrl-C to stop)", flush=True)
+    elif sys.platform.startswith("linux") and not _has_display():
+        raise RuntimeError(
+            f"{path}: no display for the native viewer (DISPLAY and WAYLAND_DISPLAY are "
+            "unset); use --web or --screenshot OUT.png"
+        )
     args = viewer_args(path, web=web, web_port=web_port, grpc_port=grpc_port)
     try:
         return subprocess.call([*rerun_command(), *args])

@@ -7,7 +7,13 @@ from functools import lru_cache
 import rerun as rr
 
 from tolins.geometry.specs import SocketSpec
-from tolins.record.geometry import board_geometry, carrier_box, pin_geometry
+from tolins.record.geometry import (
+    TriangleMesh,
+    board_geometry,
+    carrier_box,
+    flat_shaded,
+    pin_geometry,
+)
 from tolins.record.layout import BOARD, WORLD
 
 BOARD_COLOR = (64, 115, 77)
@@ -16,19 +22,21 @@ PIN_COLOR = (217, 179, 77)
 CARRIER_COLOR = (153, 153, 166, 110)
 
 
+def _mesh(mesh: TriangleMesh, color: tuple[int, ...]) -> rr.Mesh3D:
+    vertices, triangles, normals = flat_shaded(mesh)
+    return rr.Mesh3D(
+        vertex_positions=vertices,
+        triangle_indices=triangles,
+        vertex_normals=normals,
+        albedo_factor=color,
+    )
+
+
 def log_board(stream: rr.RecordingStream, spec: SocketSpec) -> None:
     """The world frame (z up, mm) and ``spec``'s board, static."""
     board = board_geometry(spec)
     stream.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    stream.log(
-        f"{BOARD}/walls",
-        rr.Mesh3D(
-            vertex_positions=board.walls.vertices,
-            triangle_indices=board.walls.triangles,
-            albedo_factor=BOARD_COLOR,
-        ),
-        static=True,
-    )
+    stream.log(f"{BOARD}/walls", _mesh(board.walls, BOARD_COLOR), static=True)
     stream.log(
         f"{BOARD}/boxes",
         rr.Boxes3D(
@@ -67,11 +75,7 @@ def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsCompon
             fill_mode="solid",
         )
     else:
-        archetype = rr.Mesh3D(
-            vertex_positions=pins.mesh.vertices,
-            triangle_indices=pins.mesh.triangles,
-            albedo_factor=PIN_COLOR,
-        )
+        archetype = _mesh(pins.mesh, PIN_COLOR)
     carrier = carrier_box(spec)
     carrier_archetype = rr.Boxes3D(
         centers=carrier.centers,

@@ -4,12 +4,13 @@
 # with tolins installed editable, test extras included.
 #
 # mesa-vulkan-drivers: a software Vulkan driver (lavapipe) for the rerun viewer's
-# headless screenshots (`tolins replay FILE.rrd --screenshot OUT.png`). Without it
-# everything else works.
+# headless screenshots (`tolins replay FILE.rrd --screenshot OUT.png`); libegl1 and
+# libgl1-mesa-dri: headless OpenGL (EGL) for MuJoCo's renderer (`render_mode="rgb_array"`,
+# dm_control's `physics.render`). Without them everything else works.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-DEBIAN_PACKAGES=(mesa-vulkan-drivers)
+DEBIAN_PACKAGES=(mesa-vulkan-drivers libegl1 libgl1-mesa-dri)
 
 missing=()
 for package in "${DEBIAN_PACKAGES[@]}"; do

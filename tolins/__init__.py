@@ -23,6 +23,16 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 register_envs()
 
+
+def __getattr__(name: str) -> object:
+    # tolins.embedding needs torch: import it on first use, not with tolins.
+    if name == "embedding":
+        import importlib
+
+        return importlib.import_module("tolins.embedding")
+    raise AttributeError(f"module 'tolins' has no attribute {name!r}")
+
+
 __all__ = [
     "CircularSocket",
     "PolygonSocket",

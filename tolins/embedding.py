@@ -1,0 +1,92 @@
+"""``tolins.embedding``: the paper's 5-d tolerance embedding ψ(ε) of a workpiece.
+
+``encode(spec)`` images the spec's tolerance (:func:`tolins.tolerance.image`, 64×64, the
+family's window) and runs the encoder of the shipped checkpoint of ``spec.family``
+(``assets/embedding_circle.pt``, ``assets/embedding_polygon.pt``; loaded once, cached).
+
+Out of range: a spec outside the ranges its family was trained on
+(:mod:`tolins.learning.ranges`, e.g. a 2*30 socket, a 3-row socket, bent pins, an
+octagon) raises ``ValueError`` listing what is outside. Pass ``strict=False`` to
+extrapolate anyway; that emits an :class:`ExtrapolationWarning`.
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.tolerance import image
+from tolins.learning.autoencoder import to_image, to_targets
+from tolins.learning.checkpoint import EmbeddingModel, load_checkpoint
+
+#: The repository's (and an editable install's) ``assets/`` folder.
+ASSETS = Path(__file__).resolve().parents[1] / "assets"
+
+
+class ExtrapolationWarning(UserWarning):
+    """A spec outside the family's training ranges was encoded with ``strict=False``."""
+
+
+def checkpoint_path(family: str) -> Path:
+    """The shipped checkpoint of ``family``: ``assets/embedding_<family>.pt``."""
+    if family not in ("circle", "polygon"):
+        raise ValueError(f"family={family!r}; allowed: 'circle', 'polygon'")
+    return ASSETS / f"embedding_{family}.pt"
+
+
+@functools.cache
+def load_model(family: str) -> EmbeddingModel:
+    """The shipped model of ``family``, loaded once per process."""
+    path = checkpoint_path(family)
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"{path} is missing; it ships with the repository (or train it with "
+            f"`tolins embed train --family {family} --out {path}`)"
+        )
+    return load_checkpoint(path, family=family)
+
+
+def encode(spec: SocketSpec, *, strict: bool = True) -> np.ndarray:
+    """The embedding ``(5,)`` (float64) of ``spec``'s tolerance image."""
+    model = _checked_model(spec, strict)
+    images = image(spec, model.network.architecture.resolution, window=model.window)[None]
+    with torch.no_grad():
+        latent = model.network.encode(to_targets(images, model.window.theta_cap))
+    return latent[0].numpy().astype(np.float64)
+
+
+def decode(embedding: np.ndarray, family: str) -> np.ndarray:
+    """The tolerance image ``(64, 64)`` the decoder of ``family`` makes of ``embedding``."""
+    model = load_model(family)
+    latent = torch.as_tensor(np.asarray(embedding, dtype=np.float32)).reshape(1, -1)
+    dim = model.network.architecture.latent_dim
+    if latent.shape[1] != dim:
+        raise ValueError(f"embedding has {latent.shape[1]} values; allowed: {dim}")
+    with torch.no_grad():
+        return to_image(model.network.decode(latent), model.window.theta_cap)[0]
+
+
+def reconstruct(spec: SocketSpec, *, strict: bool = True) -> np.ndarray:
+    """``decode(encode(spec))``: the autoencoder's version of ``spec``'s tolerance image."""
+    return decode(encode(spec, strict=strict), spec.family)
+
+
+def _checked_model(spec: SocketSpec, strict: bool) -> EmbeddingModel:
+    family = getattr(spec, "family", None)
+    if family not in ("circle", "polygon"):
+        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket or PolygonSocket")
+    model = load_model(family)
+    outside = model.ranges.violations(spec)
+    if outside:
+        message = (
+            f"{spec!r} is outside the {family} embedding's training ranges: {'; '.join(outside)}"
+        )
+        if strict:
+            raise ValueError(f"{message}; pass strict=False to extrapolate")
+        warnings.warn(message, ExtrapolationWarning, stacklevel=3)
+    return model

@@ -1,0 +1,124 @@
+"""Embedding checkpoints: atomic writes and checked loads.
+
+A checkpoint is a ``torch.save`` dict of plain values and tensors (loaded with
+``weights_only=True``): ``format``, ``family``, ``architecture``, ``config`` (the
+training config), ``seed``, ``tolins_version``, ``ranges`` (the family's spec ranges),
+``window`` (the image window) and ``state_dict``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from tolins.geometry.tolerance import WINDOWS, ImageWindow
+from tolins.learning.autoencoder import Architecture, ToleranceAutoencoder
+from tolins.learning.ranges import FamilyRanges, ranges_from_dict
+
+#: Bumped when the stored layout or the meaning of the model's inputs changes.
+FORMAT = "tolins.embedding/1"
+
+
+@dataclass(frozen=True)
+class EmbeddingModel:
+    """A loaded checkpoint: the network (in eval mode) and what it was trained on."""
+
+    family: str
+    network: ToleranceAutoencoder
+    window: ImageWindow
+    ranges: FamilyRanges
+    config: dict[str, Any]
+    seed: int
+    tolins_version: str
+
+
+def save_checkpoint(path: str | os.PathLike, model: EmbeddingModel) -> Path:
+    """Write ``model`` to ``path`` atomically (temp file in the same folder + ``os.replace``)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    payload = {
+        "format": FORMAT,
+        "family": model.family,
+        "architecture": asdict(model.network.architecture),
+        "config": dict(model.config),
+        "seed": int(model.seed),
+        "tolins_version": model.tolins_version,
+        "ranges": asdict(model.ranges),
+        "window": asdict(model.window),
+        "state_dict": model.network.state_dict(),
+    }
+    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        os.chmod(temp, 0o644)  # mkstemp makes it 0600
+        with os.fdopen(handle, "wb") as file:
+            torch.save(payload, file)
+            file.flush()
+            os.fsync(file.fileno())
+        os.replace(temp, path)
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_checkpoint(path: str | os.PathLike, family: str | None = None) -> EmbeddingModel:
+    """Load and check a checkpoint written by :func:`save_checkpoint`.
+
+    Raises ``ValueError`` when the file is not such a checkpoint, was written for another
+    family than ``family`` (if given), for another image window than this tolins uses, or
+    when its weights do not fit the architecture it declares.
+    """
+    path = Path(path)
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+    except FileNotFoundError:
+        raise
+    except Exception as error:
+        raise ValueError(f"{path} is not a readable torch checkpoint: {error}") from error
+    if not isinstance(payload, dict) or payload.get("format") != FORMAT:
+        found = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
+        raise ValueError(f"{path} has format {found!r}; allowed: {FORMAT!r}")
+    stored = payload["family"]
+    if family is not None and stored != family:
+        raise ValueError(f"{path} is a {stored!r} checkpoint; allowed: {family!r}")
+    window = ImageWindow(**payload["window"])
+    if window != WINDOWS[stored]:
+        raise ValueError(
+            f"{path} was trained on the window {window}; this tolins images {stored} "
+            f"workpieces in {WINDOWS[stored]}: retrain with `tolins embed train`"
+        )
+    network = _network(path, payload["architecture"], payload["state_dict"])
+    return EmbeddingModel(
+        family=stored,
+        network=network,
+        window=window,
+        ranges=ranges_from_dict(stored, payload["ranges"]),
+        config=payload["config"],
+        seed=payload["seed"],
+        tolins_version=payload["tolins_version"],
+    )
+
+
+def _network(path: Path, stored: dict[str, Any], state: dict[str, Any]) -> ToleranceAutoencoder:
+    names = {item.name for item in dataclasses.fields(Architecture)}
+    if set(stored) != names:
+        raise ValueError(
+            f"{path} declares architecture fields {sorted(stored)}; allowed: {sorted(names)}"
+        )
+    architecture = Architecture(**{**stored, "channels": tuple(stored["channels"])})
+    network = ToleranceAutoencoder(architecture)
+    try:
+        network.load_state_dict(state)
+    except RuntimeError as error:
+        first = str(error).splitlines()[1:3]
+        raise ValueError(
+            f"{path}: its weights do not fit the architecture it declares ({architecture}): "
+            f"{' '.join(line.strip() for line in first)}"
+        ) from error
+    return network.eval()

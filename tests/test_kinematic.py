@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from rollouts import push_down, random_rollout
 
 import tolins
 from tolins.envs import GENERIC_ID, TASKS, InsertionEnv
@@ -26,15 +27,7 @@ SEARCH_TOLERANCE = 1e-9
 
 
 def _push_down(socket, pose, steps: int = HORIZON) -> list[dict]:
-    env = InsertionEnv(socket, backend="kinematic", measurement_noise=0)
-    env.reset(seed=0, options={"pose": pose})
-    infos = []
-    for _ in range(steps):
-        *_, terminated, truncated, info = env.step(DOWN)
-        infos.append(info)
-        if terminated or truncated:
-            break
-    return infos
+    return push_down(socket, pose, steps, backend="kinematic")
 
 
 @pytest.mark.parametrize("gym_id", [task.gym_id for task in TASKS])
@@ -144,18 +137,12 @@ def test_bent_pins_go_in_where_the_bend_allows() -> None:
     assert _push_down(bent, [-0.3, 0.0, 0.0, 0.05])[-1]["success"]
 
 
+def _mostly_down(action: np.ndarray) -> np.ndarray:
+    return action * [0.3, 0.3, 0.3, 1] - [0, 0, 0, 2.0]
+
+
 def _rollout(gym_id: str, seed: int) -> list[np.ndarray]:
-    env = gym.make(gym_id, backend="kinematic")
-    rng = np.random.default_rng(5)
-    observation, _ = env.reset(seed=seed)
-    observations = [observation]
-    for _ in range(HORIZON):
-        action = rng.uniform(-A_MAX, A_MAX) * [0.3, 0.3, 0.3, 1] - [0, 0, 0, 2.0]
-        observation, _, terminated, truncated, _ = env.step(action)
-        observations.append(observation)
-        if terminated or truncated:
-            break
-    return observations
+    return random_rollout(gym.make(gym_id, backend="kinematic"), seed, shape=_mostly_down)
 
 
 @pytest.mark.parametrize("gym_id", ["tolins/Circle2x2-v0", "tolins/Circle2x1Defective-v0"])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rollouts import push_down
 
 import tolins
 from tolins.envs import InsertionEnv
@@ -39,18 +40,6 @@ CASES = [
 IDS = [f"{type(s).__name__}{getattr(s, 'sides', '')}-{'xyt'[axis]}" for s, axis, *_ in CASES]
 
 
-def _push_down(socket, pose, steps: int = HORIZON, speed: float = A_MAX[3]) -> list[dict]:
-    env = InsertionEnv(socket, measurement_noise=0)
-    env.reset(seed=0, options={"pose": pose})
-    infos = []
-    for _ in range(steps):
-        _, _, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
-        infos.append(info)
-        if terminated or truncated:
-            break
-    return infos
-
-
 def _pose(axis: int, offset: float) -> list[float]:
     pose = [0.0, 0.0, 0.0, 0.05]
     pose[axis] = offset
@@ -59,7 +48,7 @@ def _pose(axis: int, offset: float) -> list[float]:
 
 @pytest.mark.parametrize(("socket", "axis", "inside", "outside"), CASES, ids=IDS)
 def test_offset_inside_the_clearance_reaches_full_depth(socket, axis, inside, outside) -> None:
-    infos = _push_down(socket, _pose(axis, inside))
+    infos = push_down(socket, _pose(axis, inside))
     assert infos[-1]["success"]
     assert infos[-1]["pose"][3] <= -1.0
     assert infos[-1]["n_collisions"] == 0
@@ -69,7 +58,7 @@ def test_offset_inside_the_clearance_reaches_full_depth(socket, axis, inside, ou
 def test_offset_outside_the_clearance_is_blocked_at_the_surface(
     socket, axis, inside, outside
 ) -> None:
-    infos = _push_down(socket, _pose(axis, outside), steps=4)
+    infos = push_down(socket, _pose(axis, outside), steps=4)
     last = infos[-1]
     assert not last["success"]
     assert abs(last["pose"][3]) < 1e-3
@@ -81,7 +70,7 @@ def test_offset_outside_the_clearance_is_blocked_at_the_surface(
 @pytest.mark.parametrize("socket", [CIRCLE, SQUARE, HEXAGON, TRIANGLE], ids=lambda s: repr(s)[:20])
 def test_full_speed_push_for_the_whole_horizon_never_tunnels(socket) -> None:
     blocked = [0.5, 0.0, 0.0, 0.05] if socket is CIRCLE else [0.3, 0.0, 0.0, 0.05]
-    infos = _push_down(socket, blocked)
+    infos = push_down(socket, blocked)
     assert len(infos) == HORIZON and not infos[-1]["success"]
     penetration = -min(info["pose"][3] for info in infos)
     assert penetration < 1e-3  # below 1 µm
@@ -90,8 +79,8 @@ def test_full_speed_push_for_the_whole_horizon_never_tunnels(socket) -> None:
 
 
 def test_bent_pins_insert_where_the_defect_allows_and_not_at_the_nominal_goal() -> None:
-    assert not _push_down(BENT, [0.0, 0.0, 0.0, 0.05], steps=4)[-1]["success"]
-    assert _push_down(BENT, [-0.3, 0.0, 0.0, 0.05])[-1]["success"]
+    assert not push_down(BENT, [0.0, 0.0, 0.0, 0.05], steps=4)[-1]["success"]
+    assert push_down(BENT, [-0.3, 0.0, 0.0, 0.05])[-1]["success"]
 
 
 def test_force_and_torque_point_against_the_push() -> None:
@@ -127,5 +116,5 @@ def test_pins_5_to_60_um_beyond_the_clearance_are_not_pulled_in(
     """Contacts resolved sideways at the hole's edge must not ratchet pins into the hole."""
     for beyond_um in (5, 10, 20, 35, 60):
         pose = _pose(axis, limit + beyond_um * 1e-3 / lever)
-        last = _push_down(socket, pose, steps=6, speed=speed)[-1]
+        last = push_down(socket, pose, steps=6, speed=speed)[-1]
         assert not last["success"] and last["pose"][3] > -1e-3, (beyond_um, last["pose"])

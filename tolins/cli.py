@@ -66,10 +66,81 @@ def _replay(args: argparse.Namespace) -> int:
     from tolins.record import RrdError, replay
 
     try:
-        return replay(args.file, web=args.web, screenshot=args.screenshot, web_port=args.port)
+        return replay(
+            args.file,
+            web=args.web,
+            screenshot=args.screenshot,
+            web_port=args.port,
+            grpc_port=args.grpc_port,
+        )
     except (RrdError, ValueError, RuntimeError) as error:
         print(f"tolins replay: {error}", file=sys.stderr)
         return 1
+
+
+def _embed_train(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from tolins.config_args import config_from_args
+    from tolins.learning.checkpoint import save_checkpoint
+    from tolins.learning.embedding_config import EmbeddingTrainConfig
+    from tolins.learning.embedding_eval import held_out_specs, measure
+    from tolins.learning.embedding_train import train_embedding
+
+    try:
+        config = config_from_args(EmbeddingTrainConfig, args)
+    except ValueError as error:
+        print(f"tolins embed train: {error}", file=sys.stderr)
+        return 2
+    out = args.out or f"runs/embedding_{config.family}.pt"
+    start = time.perf_counter()
+    with tqdm(total=config.epochs, desc=f"training {config.family} embedding", unit="epoch") as bar:
+
+        def advance(_: int, loss: float) -> None:
+            bar.set_postfix(loss=f"{loss:.4f}")
+            bar.update()
+
+        result = train_embedding(config, on_epoch=advance)
+    path = save_checkpoint(out, result.model)
+    quality = measure(result.model, held_out_specs(config.family, args.held_out))
+    print(
+        f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB, {time.perf_counter() - start:.0f} s); "
+        f"{quality.count} held-out workpieces: region IoU {quality.iou:.3f} "
+        f"(worst {quality.worst_iou:.3f}), theta error {quality.theta_error:.4f} rad "
+        f"({quality.relative_theta_error:.1%} of each image's largest theta)"
+    )
+    return 0
+
+
+def _infer_study(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from tolins.inference.report import format_table, save_plot, write_json
+    from tolins.inference.study import StudyConfig, run_study
+
+    try:
+        config = StudyConfig(
+            samples=args.samples,
+            seed=args.seed,
+            particles=args.particles,
+            workers=args.workers,
+            methods=tuple(args.methods.split(",")) if args.methods else StudyConfig.methods,
+            discard_below=args.discard_below,
+            physics=args.physics,
+        )
+    except ValueError as error:
+        print(f"tolins infer-study: {error}", file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    with tqdm(total=config.samples, desc="inference study", unit="workpiece") as bar:
+        result = run_study(config, on_workpiece=lambda _: bar.update())
+    print(format_table(result))
+    print(f"seed {config.seed}, {config.particles} particles, {time.perf_counter() - start:.0f} s")
+    if args.json:
+        print(f"wrote {write_json(result, args.json)}")
+    if args.plot:
+        print(f"wrote {save_plot(result, args.plot)}")
+    return 0
 
 
 def _positive_int(text: str) -> int:
@@ -105,8 +176,60 @@ def build_parser() -> argparse.ArgumentParser:
     mode.add_argument("--web", action="store_true", help="serve the web viewer on 127.0.0.1")
     mode.add_argument("--screenshot", metavar="OUT.png", help="render headless to a PNG")
     replay.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
+    replay.add_argument(
+        "--grpc-port", type=int, default=9876, help="port serving the recording (with --web)"
+    )
     replay.set_defaults(run=_replay)
+    _add_embed(commands)
+    _add_infer_study(commands)
+    _add_train(commands)
     return parser
+
+
+def _add_train(commands: argparse._SubParsersAction) -> None:
+    from tolins.learning.train_cli import add_train_parser
+
+    add_train_parser(commands)
+
+
+def _add_embed(commands: argparse._SubParsersAction) -> None:
+    from tolins.config_args import add_config_arguments
+    from tolins.learning.embedding_config import EmbeddingTrainConfig
+
+    embed = commands.add_parser("embed", help="the tolerance embedding (autoencoder)")
+    actions = embed.add_subparsers(dest="action", required=True)
+    train = actions.add_parser("train", help="train the autoencoder of one workpiece family")
+    add_config_arguments(train, EmbeddingTrainConfig)
+    train.add_argument("--out", help="checkpoint file (default: runs/embedding_FAMILY.pt)")
+    train.add_argument(
+        "--held-out", type=_positive_int, default=200, help="held-out workpieces to score"
+    )
+    train.set_defaults(run=_embed_train)
+
+
+def _add_infer_study(commands: argparse._SubParsersAction) -> None:
+    study = commands.add_parser(
+        "infer-study", help="the paper's probabilistic-inference study (2*1, bent pins)"
+    )
+    study.add_argument("--samples", type=_positive_int, default=500, help="workpieces")
+    study.add_argument("--seed", type=int, default=0, help="seed of defects and methods")
+    study.add_argument(
+        "--particles", type=_positive_int, default=1000, help="posterior samples per query"
+    )
+    study.add_argument("--workers", type=_positive_int, default=2, help="processes")
+    study.add_argument("--methods", help="comma-separated subset (default: all)")
+    study.add_argument(
+        "--discard-below",
+        type=float,
+        default=0.0,
+        help="inference gives up when the best expected success falls below this (0: never)",
+    )
+    study.add_argument(
+        "--physics", action="store_true", help="outcomes and blocked pins from MuJoCo contact"
+    )
+    study.add_argument("--json", metavar="OUT.json", help="write the figures as JSON")
+    study.add_argument("--plot", metavar="OUT.png", help="save the cumulative-success plot")
+    study.set_defaults(run=_infer_study)
 
 
 def main(argv: list[str] | None = None) -> int:

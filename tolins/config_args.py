@@ -54,6 +54,7 @@ def add_config_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
             raise ValueError(f"{cls.__name__}.{field.name} needs a default to become an option")
         option = "--" + field.name.replace("_", "-")
         help_text = f"{docs.get(field.name, '')} (default: {field.default})".strip()
+        help_text = help_text.replace("%", "%%")  # argparse %-formats help strings
         kind, optional = _unwrap_optional(hints[field.name])
         kwargs: dict[str, Any] = {"default": field.default, "help": help_text, "dest": field.name}
         if kind is bool:

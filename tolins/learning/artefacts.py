@@ -1,0 +1,84 @@
+"""Run artefacts: atomic writes, checked loads and the metadata every artefact records."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import torch
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[Any], None], mode: str = "wb") -> Path:
+    """Call ``write(file)`` on a temp file beside ``path``, then ``os.replace`` it into place
+    (as :func:`tolins.learning.checkpoint.save_checkpoint` does): no reader sees half a file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(handle, mode) as file:
+            write(file)
+            file.flush()
+            os.fsync(file.fileno())
+        os.replace(temp, path)
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def atomic_torch_save(path: str | os.PathLike, payload: dict[str, Any]) -> Path:
+    """``torch.save(payload)`` to ``path`` atomically."""
+    return atomic_write(path, lambda file: torch.save(payload, file))
+
+
+def atomic_json(path: str | os.PathLike, data: Any) -> Path:
+    """``data`` as indented JSON at ``path``, atomically."""
+    return atomic_write(path, lambda file: json.dump(data, file, indent=2), mode="w")
+
+
+def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:
+    """The ``torch.load`` dict (``weights_only``) at ``path``; ``ValueError`` unless its
+    ``format`` is ``fmt``."""
+    try:
+        payload = torch.load(Path(path), map_location="cpu", weights_only=True)
+    except FileNotFoundError:
+        raise
+    except Exception as error:
+        raise ValueError(f"{path} is not a readable torch checkpoint: {error}") from error
+    found = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
+    if found != fmt:
+        raise ValueError(f"{path} has format {found!r}; allowed: {fmt!r}")
+    return payload
+
+
+def run_metadata(seed: int, **configs: Any) -> dict[str, Any]:
+    """What every artefact records: each config (a dataclass or dict), the seed, the version."""
+    import tolins
+
+    return {
+        "configs": {
+            name: asdict(c) if hasattr(c, "__dataclass_fields__") else c
+            for name, c in configs.items()
+        },
+        "seed": int(seed),
+        "tolins_version": tolins.__version__,
+    }
+
+
+@contextlib.contextmanager
+def single_threaded_torch() -> Iterator[None]:
+    """Run torch on one thread inside the block (restored after). The networks are tiny:
+    intra-op threads only contend with the rollout threads (measured 20× slower on 2
+    busy cores)."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)

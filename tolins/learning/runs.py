@@ -1,0 +1,128 @@
+"""``tolins train bc|rs-gail|tolerance-guided``: whole runs that write their artefacts.
+
+Every artefact (``policy.pt``, ``checkpoint.pt``, ``run.json``) records the configs, the
+seed and ``tolins.__version__`` (:func:`tolins.learning.artefacts.run_metadata`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from tolins.learning.artefacts import atomic_json, run_metadata
+from tolins.learning.bc import BCResult, behaviour_clone
+from tolins.learning.curves import plot_curves, write_curves_csv
+from tolins.learning.demonstrations import Rollout, collect
+from tolins.learning.policy import load_policy, save_policy
+from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
+from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
+from tolins.learning.tolerance_guided import train_tolerance_guided, workpieces
+
+
+def demonstrations(env_ids: list[str], task: TaskConfig) -> list[Rollout]:
+    """The expert's episodes on each env (seeded from ``task.seed`` and the env's index)."""
+    episodes = []
+    for index, env_id in enumerate(env_ids):
+        seed = task.seed * 1000 + index
+        episodes += collect(env_id, task.expert, task.demonstrations, seed, task.backend)
+    return episodes
+
+
+def run_bc(env_id: str, task: TaskConfig, bc: BCConfig, out: str | Path) -> BCResult:
+    """Clone the expert; write ``policy.pt``, ``bc_loss.csv`` and ``run.json``."""
+    out = Path(out)
+    metadata = run_metadata(task.seed, env=env_id, task=task, bc=bc)
+    result = behaviour_clone(demonstrations([env_id], task), bc, seed=task.seed)
+    save_policy(out / "policy.pt", result.policy, metadata)
+    rows = [{"epoch": i, "loss": loss} for i, loss in enumerate(result.losses)]
+    write_curves_csv(out / "bc_loss.csv", rows)
+    fit = {
+        "train_loss": result.train_loss,
+        "held_out_loss": result.held_out_loss,
+        "held_out_episodes": result.held_out_episodes,
+        "first_epoch_loss": result.losses[0],
+    }
+    atomic_json(out / "run.json", {**metadata, "fit": fit})
+    return result
+
+
+def run_rs_gail(
+    env_id: str,
+    task: TaskConfig,
+    bc: BCConfig,
+    rs_gail: RSGailConfig,
+    out: str | Path,
+    *,
+    init: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+) -> RSGailResult:
+    """π_n: RS-GAIL from the BC policy ``init`` (or one cloned here with ``bc``)."""
+    out = Path(out)
+    metadata = run_metadata(task.seed, env=env_id, init=init, task=task, bc=bc, rs_gail=rs_gail)
+    expert = demonstrations([env_id], task)
+    if init is not None:
+        policy, _ = load_policy(init, kind="nominal")
+    else:
+        policy = behaviour_clone(expert, bc, seed=task.seed).policy
+    result = train_rs_gail(
+        policy,
+        [Workpiece(env_id)],
+        expert,
+        rs_gail,
+        seed=task.seed,
+        backend=task.backend,
+        out=out,
+        metadata=metadata,
+        resume=resume,
+        progress=progress,
+    )
+    _finish(out, result, metadata, f"RS-GAIL on {env_id}")
+    return result
+
+
+def run_tolerance_guided(
+    env_ids: list[str],
+    task: TaskConfig,
+    rs_gail: RSGailConfig,
+    residual: ResidualConfig,
+    out: str | Path,
+    *,
+    nominal: str,
+    resume: bool = False,
+    progress: bool = True,
+) -> RSGailResult:
+    """π_φ: φ2 by RS-GAIL over ``env_ids`` with φ1 from the nominal policy file ``nominal``."""
+    out = Path(out)
+    metadata = run_metadata(
+        task.seed,
+        env=",".join(env_ids),
+        nominal=nominal,
+        task=task,
+        rs_gail=rs_gail,
+        residual=residual,
+    )
+    policy, _ = load_policy(nominal, kind="nominal")
+    result = train_tolerance_guided(
+        policy,
+        workpieces(env_ids),
+        demonstrations(env_ids, task),
+        rs_gail,
+        residual,
+        seed=task.seed,
+        backend=task.backend,
+        out=out,
+        metadata=metadata,
+        resume=resume,
+        progress=progress,
+    )
+    _finish(out, result, metadata, f"tolerance-guided on {', '.join(env_ids)}")
+    return result
+
+
+def _finish(out: Path, result: RSGailResult, metadata: dict[str, Any], title: str) -> None:
+    save_policy(out / "policy.pt", result.policy, metadata)
+    if result.history:
+        plot_curves(out / "curves.png", result.history, title)
+    summary = {"stopped": result.stopped, "iterations": len(result.history), "final": result.final}
+    atomic_json(out / "run.json", {**metadata, "result": summary})

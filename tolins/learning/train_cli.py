@@ -1,0 +1,85 @@
+"""The ``tolins train`` sub-commands, generated from the run configs (see ``tolins.cli``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from tolins.config_args import add_config_arguments, config_from_args
+from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
+
+_CONFIGS = {
+    "bc": (TaskConfig, BCConfig),
+    "rs-gail": (TaskConfig, BCConfig, RSGailConfig),
+    "tolerance-guided": (TaskConfig, RSGailConfig, ResidualConfig),
+}
+_HELP = {
+    "bc": "behaviour cloning of a scripted expert",
+    "rs-gail": "the nominal policy π_n by RS-GAIL (CMA-ES) from a BC policy",
+    "tolerance-guided": "the residual φ2 of π_φ by RS-GAIL over several workpieces",
+}
+
+
+def add_train_parser(commands: argparse._SubParsersAction) -> None:
+    """Add ``train bc|rs-gail|tolerance-guided`` to the ``tolins`` parser."""
+    train = commands.add_parser("train", help="train policies (BC, RS-GAIL, tolerance-guided)")
+    methods = train.add_subparsers(dest="method", required=True)
+    for method, configs in _CONFIGS.items():
+        parser = methods.add_parser(method, help=_HELP[method])
+        env_help = "env ids, comma-separated" if method == "tolerance-guided" else "env id"
+        parser.add_argument("--env", required=True, help=f"{env_help}, e.g. tolins/Circle2x2-v0")
+        parser.add_argument("--out", required=True, help="output folder")
+        for config in configs:
+            add_config_arguments(parser, config)
+        if method == "rs-gail":
+            parser.add_argument("--init", help="BC policy.pt to start from (default: clone here)")
+        if method == "tolerance-guided":
+            parser.add_argument("--nominal", required=True, help="π_n's policy.pt (φ1)")
+        if method != "bc":
+            parser.add_argument("--resume", action="store_true", help="continue OUT/checkpoint")
+        parser.set_defaults(run=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from tolins.learning import runs
+
+    try:
+        configs = {cls.__name__: config_from_args(cls, args) for cls in _CONFIGS[args.method]}
+        task = configs["TaskConfig"]
+        if args.method == "bc":
+            result = runs.run_bc(args.env, task, configs["BCConfig"], args.out)
+            print(
+                f"wrote {args.out}: BC loss {result.losses[0]:.4f} → {result.losses[-1]:.4f}, "
+                f"held-out {result.held_out_loss:.4f} ({result.held_out_episodes} episodes)"
+            )
+            return 0
+        if args.method == "rs-gail":
+            result = runs.run_rs_gail(
+                args.env,
+                task,
+                configs["BCConfig"],
+                configs["RSGailConfig"],
+                args.out,
+                init=args.init,
+                resume=args.resume,
+            )
+        else:
+            result = runs.run_tolerance_guided(
+                args.env.split(","),
+                task,
+                configs["RSGailConfig"],
+                configs["ResidualConfig"],
+                args.out,
+                nominal=args.nominal,
+                resume=args.resume,
+            )
+    except (ValueError, FileNotFoundError) as error:
+        print(f"tolins train {args.method}: {error}", file=sys.stderr)
+        return 2
+    final = result.final
+    print(
+        f"wrote {args.out}: {len(result.history)} iterations ({result.stopped}); final policy: "
+        f"reward {final['reward']:.2f}, success {final['success']:.2f}, "
+        f"D(student) {final['d_expert']:.2f}"
+    )
+    return 0

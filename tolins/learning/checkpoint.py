@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import torch
 
+from tolins.atomic import atomic_write
 from tolins.geometry.tolerance import WINDOWS, ImageWindow
 from tolins.learning.autoencoder import Architecture, ToleranceAutoencoder
 from tolins.learning.ranges import FamilyRanges, ranges_from_dict
@@ -40,8 +40,6 @@ class EmbeddingModel:
 
 def save_checkpoint(path: str | os.PathLike, model: EmbeddingModel) -> Path:
     """Write ``model`` to ``path`` atomically (temp file in the same folder + ``os.replace``)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     payload = {
         "format": FORMAT,
         "family": model.family,
@@ -53,18 +51,7 @@ def save_checkpoint(path: str | os.PathLike, model: EmbeddingModel) -> Path:
         "window": asdict(model.window),
         "state_dict": model.network.state_dict(),
     }
-    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        os.chmod(temp, 0o644)  # mkstemp makes it 0600
-        with os.fdopen(handle, "wb") as file:
-            torch.save(payload, file)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write(path, lambda file: torch.save(payload, file))
 
 
 def load_checkpoint(path: str | os.PathLike, family: str | None = None) -> EmbeddingModel:

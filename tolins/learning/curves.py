@@ -6,7 +6,7 @@ import csv
 import io
 from pathlib import Path
 
-from tolins.learning.artefacts import atomic_write
+from tolins.atomic import atomic_write
 
 
 def write_curves_csv(path: str | Path, history: list[dict[str, float]]) -> Path:

@@ -196,6 +196,32 @@ def _arc_reach(a: np.ndarray | float, beta: np.ndarray | float, b: np.ndarray) -
     return np.where(a * np.cos(beta) <= b, reach, np.nan)
 
 
+def pins_inside(spec: CircularSocket, offsets: object, poses: object) -> np.ndarray:
+    """Whether each pin is in its hole, for every workpiece in ``offsets`` and pose in ``poses``.
+
+    ``offsets`` ``[..., n_pins, 2]`` replaces the spec's own pin offsets (mm); ``poses``
+    ``[..., 3]`` are ``[x, y, theta]``; the two leading shapes broadcast. Pin ``i`` is in
+    iff ``|R(theta) (h_i + eps_i) + (x, y) - h_i| <= hole_radius - pin_radius``. Returns a
+    bool array ``broadcast(offsets.shape[:-2], poses.shape[:-1]) + (n_pins,)``;
+    ``pins_inside(...).all(-1)`` is :func:`contains` of each offset workpiece.
+    """
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
+    array = _checked_poses(poses)
+    eps = np.asarray(offsets, dtype=float)
+    if eps.ndim < 2 or eps.shape[-2:] != (spec.n_pins, 2) or not np.isfinite(eps).all():
+        raise ValueError(
+            f"offsets has shape {eps.shape} or non-finite values; allowed: finite "
+            f"[..., {spec.n_pins}, 2] in mm"
+        )
+    holes = spec.hole_centers
+    pins = holes + eps
+    cos, sin = np.cos(array[..., 2])[..., None], np.sin(array[..., 2])[..., None]
+    dx = cos * pins[..., 0] - sin * pins[..., 1] + array[..., 0, None] - holes[:, 0]
+    dy = sin * pins[..., 0] + cos * pins[..., 1] + array[..., 1, None] - holes[:, 1]
+    return dx * dx + dy * dy <= spec.clearance * spec.clearance
+
+
 @functools.lru_cache(maxsize=256)
 def _circle_geometry(spec: CircularSocket) -> tuple[np.ndarray, np.ndarray, float]:
     """Pin centres (offsets included), hole centres and radial clearance, read-only."""

@@ -1,0 +1,183 @@
+"""Probabilistic inference: posterior, goal search, study (issue 6)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tolins.cli import main
+from tolins.geometry.specs import CircularSocket
+from tolins.geometry.tolerance import contains, pins_inside
+from tolins.inference import History, expected_success, find_goal, next_goal, sample_posterior
+from tolins.inference.study import SIGMA, SOCKET, StudyConfig, run_study
+
+SPEC = SOCKET
+
+
+def _rng(seed: int = 0) -> np.random.Generator:
+    return np.random.default_rng(seed)
+
+
+def test_pins_inside_matches_contains() -> None:
+    rng = _rng()
+    eps = rng.normal(0, 0.12, size=(40, 2, 2))
+    poses = rng.normal(0, [0.2, 0.2, 0.05], size=(30, 3))
+    batch = pins_inside(SPEC, eps[:, None], poses[None]).all(-1)
+    for n in range(len(eps)):
+        bent = CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps[n])
+        assert np.array_equal(batch[n], contains(bent, poses))
+
+
+def test_posterior_concentrates_with_contact_evidence() -> None:
+    true = np.array([[0.25, 0.0], [0.0, 0.0]])  # pin 0 bent 0.25 mm along +x
+    history = History.empty()
+    rng = _rng(1)
+    for goal in ([0, 0, 0], [-0.1, 0, 0], [0.1, 0.05, 0], [0.0, -0.1, 0.02]):
+        inside = pins_inside(SPEC, true, np.array(goal, dtype=float))
+        history = history.append(goal, bool(inside.all()), ~inside)
+    prior = sample_posterior(SPEC, History.empty(), SIGMA, 2000, rng)
+    post = sample_posterior(SPEC, history, SIGMA, 2000, rng)
+
+    def spread(p: object) -> float:
+        return float(np.sqrt(p.weights @ np.sum((p.offsets - true) ** 2, axis=(1, 2))))
+
+    assert spread(post) < 0.5 * spread(prior)
+    mean = np.einsum("n,nij->ij", post.weights, post.offsets)
+    assert mean[0, 0] > 0.15
+
+
+def test_empty_history_gives_nominal_goal() -> None:
+    result = next_goal(SPEC, History.empty(), SIGMA, _rng())
+    assert np.array_equal(result.goal, np.zeros(3))
+    assert 0.5 < result.expected_success < 0.7 and not result.discard
+
+
+def test_unexplainable_history_gives_a_defined_answer() -> None:
+    history = History(np.zeros((2, 3)), np.array([True, False]))
+    post = sample_posterior(SPEC, history, SIGMA, 500, _rng())
+    assert not post.explained and np.isfinite(post.weights).all()
+    result = find_goal(SPEC, post, _rng())
+    assert result.discard and result.expected_success == 0.0
+    assert np.isfinite(result.goal).all()
+
+
+def test_goal_search_beats_nominal_on_known_defect() -> None:
+    history = History.empty().append([0, 0, 0], False)
+    post = sample_posterior(SPEC, history, SIGMA, 2000, _rng(2))
+    result = find_goal(SPEC, post, _rng(3))
+    assert result.expected_success > float(expected_success(SPEC, post, np.zeros(3))[0]) + 0.1
+
+
+def test_goal_moves_the_bent_pin_back() -> None:
+    """Pin 1 (at y = +2.5 mm) bent 0.3 mm along +x: the goal moves it along -x."""
+    true = np.array([[0.0, 0.0], [0.3, 0.0]])
+    history = History.empty()
+    for goal in ([0, 0, 0], [0, 0.15, 0], [0, -0.15, 0], [0.15, 0, 0]):
+        inside = pins_inside(SPEC, true, np.array(goal, dtype=float))
+        assert not inside.all()
+        history = history.append(goal, False, ~inside)
+    post = sample_posterior(SPEC, history, SIGMA, 2000, _rng(4))
+    x, _, theta = find_goal(SPEC, post, _rng(5)).goal
+    # Pin 1's x in its hole moves by x - 2.5 sin(theta).
+    assert x - 2.5 * np.sin(theta) < -0.1
+
+
+def test_tempering_explains_narrow_contact_histories() -> None:
+    """Evidence that few prior samples satisfy is still explained (no discard)."""
+    true = np.array([[-0.28, 0.12], [0.3, -0.2]])
+    rng = _rng(6)
+    history = History.empty()
+    for goal in rng.normal(0, [0.15, 0.15, 0.03], size=(8, 3)):
+        inside = pins_inside(SPEC, true, goal)
+        history = history.append(goal, bool(inside.all()), ~inside)
+    post = sample_posterior(SPEC, history, SIGMA, 300, _rng(7))
+    assert post.explained and np.isfinite(post.weights).all()
+
+
+def test_measurement_noise_softens_the_likelihood() -> None:
+    history = History(np.zeros((1, 3)), np.array([False]), measurement_noise=[0.1, 0.1, 0.0])
+    post = sample_posterior(SPEC, history, SIGMA, 1000, _rng())
+    assert post.explained and 0 < post.ess < 1000
+    assert np.isfinite(find_goal(SPEC, post, _rng()).goal).all()
+
+
+def test_deterministic_for_a_seed() -> None:
+    history = History.empty().append([0, 0, 0], False)
+    a, b = (next_goal(SPEC, history, SIGMA, _rng(5)) for _ in range(2))
+    assert np.array_equal(a.goal, b.goal) and a.expected_success == b.expected_success
+
+
+def test_bad_histories_raise() -> None:
+    with pytest.raises(ValueError, match="poses"):
+        History(np.zeros((2, 2)), np.array([False, False]))
+    with pytest.raises(ValueError, match="finite"):
+        History(np.array([[np.nan, 0, 0]]), np.array([False]))
+    with pytest.raises(ValueError, match="inserted"):
+        History(np.zeros((1, 3)), np.array([1]))
+    with pytest.raises(ValueError, match="blocked"):
+        History(np.zeros((1, 3)), np.array([True]), np.array([[True, False]]))
+
+
+def test_tiny_study_schema_ranking_and_worker_independence() -> None:
+    config = StudyConfig(samples=12, seed=3, particles=300, workers=1)
+    result = run_study(config)
+    data = result.to_json()
+    assert set(data) == {"nominal_insertable", "impossible", "methods"}
+    assert set(data["methods"]) == set(config.methods)
+    for figures in data["methods"].values():
+        assert set(figures) == {"success_within_10", "mean_attempts"}
+    m = data["methods"]
+    assert m["oracle"]["success_within_10"] >= m["inference"]["success_within_10"]
+    assert m["inference"]["success_within_10"] >= m["nominal"]["success_within_10"]
+    two = run_study(StudyConfig(samples=12, seed=3, particles=300, workers=2))
+    assert all(np.array_equal(result.attempts[k], two.attempts[k]) for k in config.methods)
+
+
+def test_cli_smoke(tmp_path, capsys) -> None:
+    out, plot = tmp_path / "study.json", tmp_path / "study.png"
+    code = main(
+        [
+            *("infer-study", "--samples", "4", "--particles", "200", "--workers", "1"),
+            *("--json", str(out), "--plot", str(plot)),
+        ]
+    )
+    assert code == 0
+    assert "inference" in capsys.readouterr().out
+    assert set(json.loads(out.read_text())["methods"]) >= {"inference", "random", "oracle"}
+    assert plot.stat().st_size > 1000
+
+
+def test_physics_contact_evidence_matches_geometry() -> None:
+    from tolins.inference.physics import make_backend, physics_attempt
+
+    rng = _rng(8)
+    eps = np.array([[0.05, -0.1], [0.25, 0.1]])
+    backend = make_backend(CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps))
+    for goal in rng.normal(0, [0.12, 0.12, 0.03], size=(6, 3)):
+        inserted, blocked = physics_attempt(backend, goal)
+        inside = pins_inside(SPEC, eps, goal)
+        assert inserted == inside.all()
+        assert inserted or np.array_equal(blocked, ~inside)
+
+
+def test_inference_imports_geometry_only() -> None:
+    """``tolins.inference`` (physics helper aside) loads no envs, learning, record or cli."""
+    probe = (
+        "import importlib.util, json, sys, types\n"
+        "spec = importlib.util.find_spec('tolins')\n"
+        "package = types.ModuleType('tolins')\n"
+        "package.__path__ = list(spec.submodule_search_locations)\n"
+        "sys.modules['tolins'] = package\n"
+        "import tolins.inference, tolins.inference.study, tolins.inference.report\n"
+        "print(json.dumps(sorted(n for n in sys.modules if n.startswith(('tolins.', 'mujoco')))))"
+    )
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    loaded = json.loads(result.stdout.strip().splitlines()[-1])
+    allowed = ("tolins.geometry", "tolins.inference", "tolins.atomic")
+    outside = [n for n in loaded if not n.startswith(allowed)]
+    assert not outside, outside

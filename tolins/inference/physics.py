@@ -1,0 +1,43 @@
+"""Contact evidence from the physics: which pins the board blocked on an attempt.
+
+An attempt places the workpiece ``start_height`` mm over the board at the goal and pushes
+straight down. It inserted when the pin tips end ``success_depth`` below the surface;
+otherwise pin ``i`` was blocked when its touch sensor (``MujocoBackend.pin_forces()``)
+reads more than ``touch_force`` N. This is the evidence ``History.blocked`` of the
+``inference_contact`` likelihood, measured instead of computed from the geometry.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.geometry.specs import CircularSocket
+from tolins.paper import A_MAX, CONTROL_DT
+
+
+def physics_attempt(
+    backend: MujocoBackend,
+    goal: object,
+    *,
+    start_height: float = 0.05,
+    success_depth: float = 1.0,
+    steps: int = 4,
+    touch_force: float = 0.05,
+) -> tuple[bool, np.ndarray]:
+    """``(inserted, blocked)`` of one downward push at ``goal`` ``[x, y, theta]``."""
+    x, y, theta = np.asarray(goal, dtype=float)
+    backend.reset(np.array([x, y, theta, start_height]))
+    push = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
+    for _ in range(steps):
+        state = backend.step(push)
+        if state.error:
+            raise RuntimeError(f"physics attempt at {goal!r}: {state.error}")
+        if state.pose[3] <= -success_depth:
+            return True, np.zeros(backend.spec.n_pins, dtype=bool)
+    return False, backend.pin_forces() > touch_force
+
+
+def make_backend(spec: CircularSocket) -> MujocoBackend:
+    """A MuJoCo backend of the (bent) workpiece at the paper's control period."""
+    return MujocoBackend(spec, CONTROL_DT)

@@ -1,0 +1,194 @@
+"""The posterior over bent-pin offsets given a history, as weighted samples.
+
+Prior: every pin's offset ``eps_i ~ N(0, sigma² I)``. Likelihood of attempt ``j`` at the
+true pose ``s̄_j`` (perfect measurement, the paper's eq. for ``p(ε | I_1..m, s̄_1..m)``)::
+
+    p(I_j | s̄_j, ε) = 1[s̄_j ∈ T(ε)]  if I_j = 1,   1 - 1[s̄_j ∈ T(ε)]  if I_j = 0
+    p(ε | history) ∝ p(ε) Π_j p(I_j | s̄_j, ε)
+
+With contact evidence ``b_j`` (which pins the board blocked) a failed attempt's factor is
+``Π_i 1[pin i in its hole at s̄_j] = 1 - b_ji``. With measured poses ``ŝ_j = s̄_j + ν``,
+``ν ~ N(0, diag(noise²))``, each factor is integrated over the noise (the paper's ``g′``)::
+
+    p(I_j | ŝ_j, ε) = ∫ p(I_j | s̄, ε) N(s̄; ŝ_j, diag(noise²)) ds̄ ≈ 1/K Σ_k p(I_j | ŝ_j + ν_k, ε)
+
+Samples are drawn from the prior and importance-weighted; when the effective sample size
+falls below a quarter, they are resampled and moved by Metropolis steps on
+``p(ε) Π_j p(I_j | ·, ε)`` (sequential Monte Carlo's resample-move). When no prior sample
+explains the history, they are moved through tempered targets ``p(ε) Π_j max(p_j, e^{-λ})``,
+λ = 1…16 (a narrow posterior, e.g. after contacts); failing that, the prior is widened (×2,
+×4, importance-corrected) before giving up with ``explained=False``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tolins.geometry.specs import CircularSocket
+from tolins.geometry.tolerance import pins_inside
+from tolins.inference.history import History
+
+#: Noise draws per measured attempt (``K`` above).
+NOISE_DRAWS = 32
+_WIDENINGS = (2.0, 4.0)
+_MOVES = 4
+#: Tempering levels λ when no prior sample explains the history.
+_TEMPERS = (1.0, 2.0, 4.0, 8.0, 16.0)
+
+
+@dataclass(frozen=True)
+class Posterior:
+    """Weighted samples of the pin offsets.
+
+    Attributes:
+        offsets: ``(N, n_pins, 2)`` sampled offsets ``eps`` (mm).
+        weights: ``(N,)`` normalised weights (sum 1, never NaN).
+        explained: False when no sample, even from a widened prior, explains the history
+            (then ``weights`` are uniform over prior samples).
+        widening: Factor applied to ``sigma`` to explain the history (1: none).
+    """
+
+    offsets: np.ndarray
+    weights: np.ndarray
+    explained: bool = True
+    widening: float = 1.0
+
+    @property
+    def ess(self) -> float:
+        """Effective sample size ``1 / Σ w²``."""
+        return float(1.0 / np.sum(self.weights**2))
+
+
+def log_likelihood(
+    spec: CircularSocket,
+    offsets: np.ndarray,
+    history: History,
+    noise_draws: np.ndarray | None,
+    temper: float = np.inf,
+) -> np.ndarray:
+    """``log Π_j p(I_j | s̄_j, ε)`` for each sample ``(N,)``; ``-inf`` where impossible.
+
+    ``noise_draws`` ``(m, K, 3)``: the ``ν_k`` added to measured poses (None: exact poses).
+    A finite ``temper`` λ floors every factor at ``e^{-λ}`` (``-λ`` per violated attempt).
+    """
+    if len(history) == 0:
+        return np.zeros(len(offsets))
+    poses = history.poses[:, None, :]
+    if noise_draws is not None:
+        poses = poses + noise_draws
+    # inside: (N, m, K, n_pins)
+    inside = pins_inside(spec, offsets[:, None, None], poses[None])
+    if history.blocked is None:
+        fits = inside.all(-1) == history.inserted[None, :, None]
+    else:
+        fits = np.all(inside == ~history.blocked[None, :, None, :], axis=-1)
+    with np.errstate(divide="ignore"):
+        return np.maximum(np.log(fits.mean(-1)), -temper).sum(-1)
+
+
+def sample_posterior(
+    spec: CircularSocket,
+    history: History,
+    sigma: float,
+    n_samples: int,
+    rng: np.random.Generator,
+) -> Posterior:
+    """Weighted samples of ``p(ε | history)`` under the prior ``N(0, sigma² I)`` per pin."""
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket (bent pins)")
+    if not sigma > 0 or n_samples < 2:
+        raise ValueError(f"sigma={sigma!r}, n_samples={n_samples!r}; allowed: > 0 and ≥ 2")
+    draws = _noise_draws(history, rng)
+    shape = (n_samples, spec.n_pins, 2)
+    offsets = rng.normal(0.0, sigma, size=shape)
+    log_w = log_likelihood(spec, offsets, history, draws)
+    if not np.isfinite(log_w).any():
+        offsets = _tempered(spec, history, sigma, offsets, draws, rng)
+        log_w = log_likelihood(spec, offsets, history, draws)
+    if np.isfinite(log_w).any():
+        posterior = _normalised(offsets, log_w, 1.0)
+        if posterior.ess < n_samples / 4:
+            posterior = _resample_move(spec, history, sigma, posterior, draws, rng)
+        return posterior
+    for widening in _WIDENINGS:
+        offsets = rng.normal(0.0, sigma * widening, size=shape)
+        log_w = log_likelihood(spec, offsets, history, draws)
+        # Importance correction of the widened proposal back to the prior.
+        log_w += 0.5 * (1 - widening**-2) * -np.sum(offsets**2, axis=(1, 2)) / sigma**2
+        if np.isfinite(log_w).any():
+            posterior = _normalised(offsets, log_w, widening)
+            if posterior.ess < n_samples / 4:
+                posterior = _resample_move(spec, history, sigma, posterior, draws, rng)
+            return posterior
+    uniform = np.full(n_samples, 1.0 / n_samples)
+    return Posterior(rng.normal(0.0, sigma, size=shape), uniform, False, _WIDENINGS[-1])
+
+
+def _noise_draws(history: History, rng: np.random.Generator) -> np.ndarray | None:
+    noise = history.measurement_noise
+    if noise is None or not np.any(noise > 0) or len(history) == 0:
+        return None
+    return rng.normal(0.0, 1.0, size=(len(history), NOISE_DRAWS, 3)) * noise
+
+
+def _normalised(offsets: np.ndarray, log_w: np.ndarray, widening: float) -> Posterior:
+    weights = np.exp(log_w - np.max(log_w))
+    return Posterior(offsets, weights / weights.sum(), True, widening)
+
+
+def _resample_move(
+    spec: CircularSocket,
+    history: History,
+    sigma: float,
+    posterior: Posterior,
+    draws: np.ndarray | None,
+    rng: np.random.Generator,
+    temper: float = np.inf,
+) -> Posterior:
+    """Systematic resampling, then Metropolis random-walk moves on prior × likelihood."""
+    n = len(posterior.weights)
+    positions = (rng.random() + np.arange(n)) / n
+    index = np.minimum(np.searchsorted(np.cumsum(posterior.weights), positions), n - 1)
+    offsets = posterior.offsets[index]
+    log_p = _log_target(spec, history, sigma, offsets, draws, temper)
+    step = 0.5 * np.maximum(offsets.std(axis=0), 1e-3 * sigma)
+    for _ in range(_MOVES):
+        proposal = offsets + rng.normal(size=offsets.shape) * step
+        log_q = _log_target(spec, history, sigma, proposal, draws, temper)
+        accept = np.log(rng.random(n)) < log_q - log_p
+        offsets = np.where(accept[:, None, None], proposal, offsets)
+        log_p = np.where(accept, log_q, log_p)
+    return Posterior(offsets, np.full(n, 1.0 / n), True, posterior.widening)
+
+
+def _tempered(
+    spec: CircularSocket,
+    history: History,
+    sigma: float,
+    offsets: np.ndarray,
+    draws: np.ndarray | None,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Prior samples moved through tempered targets ``p(ε) Π_j max(p_j, e^{-λ})``."""
+    previous = np.zeros(len(offsets))
+    for temper in _TEMPERS:
+        current = log_likelihood(spec, offsets, history, draws, temper)
+        weights = _normalised(offsets, current - previous, 1.0)
+        moved = _resample_move(spec, history, sigma, weights, draws, rng, temper)
+        offsets = moved.offsets
+        previous = log_likelihood(spec, offsets, history, draws, temper)
+    return offsets
+
+
+def _log_target(
+    spec: CircularSocket,
+    history: History,
+    sigma: float,
+    offsets: np.ndarray,
+    draws: np.ndarray | None,
+    temper: float = np.inf,
+) -> np.ndarray:
+    prior = -0.5 * np.sum(offsets**2, axis=(1, 2)) / sigma**2
+    return prior + log_likelihood(spec, offsets, history, draws, temper)

@@ -292,14 +292,14 @@ def test_native_replay_without_a_display_says_so(
 
 
 def test_record_cli_writes_a_verified_file(tmp_path: Path, capsys) -> None:
-    out = tmp_path / "cli.rrd"
+    out = tmp_path / "new" / "cli.rrd"  # the folder is created
     argv = ["record", "--env", "tolins/Circle2x1-v0", "--policy", "efficient"]
     assert main([*argv, "--episodes", "2", "--out", str(out), "--seed", "3"]) == 0
     assert "2 episodes" in capsys.readouterr().out
     assert check_rrd(out) > 0
     tables = _read(out)
     assert [tables[f"/metadata/episode_{k:03d}#static"]["seed"] for k in (0, 1)] == [[[3]], [[4]]]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli.rrd"]  # no temporary left
+    assert sorted(p.name for p in out.parent.iterdir()) == ["cli.rrd"]  # no temporary left
     assert main(["record", "--env", "tolins/Nope-v0", "--out", str(out)]) == 2
     assert main(["record", "--env", "tolins/Square-v0", "--out", str(tmp_path / "x.txt")]) == 2
 

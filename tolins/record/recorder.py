@@ -25,14 +25,17 @@ APPLICATION_ID = "tolins"
 
 
 def check_output_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` as a ``Path`` if it can take a new recording: ``*.rrd`` in an existing folder."""
+    """``path`` as a ``Path`` if it can take a new recording: ``*.rrd``, not a folder. Its
+    folder is created if missing."""
     path = Path(path)
     if path.suffix != ".rrd":
         raise ValueError(f"{path}: not a .rrd path; allowed: a path ending in .rrd")
-    if not path.parent.is_dir():
-        raise ValueError(f"{path}: folder {path.parent} does not exist")
     if path.is_dir():
         raise ValueError(f"{path}: is a folder; allowed: a file path ending in .rrd")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise ValueError(f"{path}: cannot create folder {path.parent}: {error.strerror}") from error
     return path
 
 

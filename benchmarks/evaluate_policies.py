@@ -1,0 +1,76 @@
+"""Evaluate policies side by side on one environment: Table 1's figures (mean ± std).
+
+Usage::
+
+    python benchmarks/evaluate_policies.py --env tolins/Circle2x2-v0 --episodes 100 \\
+        safe pi_bc=runs/bc/policy.pt pi_n=runs/pi_n/policy.pt
+
+Each policy is an expert name (``safe``, ``efficient``) or ``NAME=PATH`` of a policy saved
+by ``tolins train``. Every policy sees the same seeds (10000, 10001, ...), which no
+training run uses; policies run on 2 threads (results do not depend on it). A
+tolerance-guided policy gets the embedding of the environment's socket.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import gymnasium as gym
+import torch
+
+import tolins
+from tolins.learning.policy import load_policy
+from tolins.policies import EXPERTS
+from tolins.rollout import Summary, run_episode, summarise
+
+FIRST_SEED = 10_000
+
+
+def _make_policy(entry: str, socket):
+    if "=" not in entry:
+        return EXPERTS[entry]()
+    policy, _ = load_policy(entry.split("=", 1)[1])
+    guided = policy.architecture.kind == "tolerance_guided"
+    embedding = tolins.embedding.encode(socket) if guided else None
+    return policy.bind(embedding)
+
+
+def evaluate(entry: str, env_id: str, episodes: int, backend: str) -> Summary:
+    """Table 1's figures of ``entry`` over ``episodes`` episodes from the fixed seeds."""
+    env = gym.make(env_id, backend=backend).unwrapped
+    policy = _make_policy(entry, env.nominal_socket)
+    return summarise([run_episode(env, policy, seed=FIRST_SEED + i) for i in range(episodes)])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("policies", nargs="+", help="expert name or NAME=PATH")
+    parser.add_argument("--env", required=True)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--backend", default="mujoco", choices=["mujoco", "kinematic"])
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    start = time.perf_counter()
+    with ThreadPoolExecutor(2) as pool:
+        summaries = pool.map(
+            lambda e: evaluate(e, args.env, args.episodes, args.backend), args.policies
+        )
+        print("| policy | eval env | reward | success rate | steps | collisions |")
+        print("|---|---|---|---|---|---|")
+        for entry, s in zip(args.policies, summaries, strict=True):
+            print(
+                f"| {entry.split('=')[0]} | {args.env} | {s.reward_mean:.2f} ± {s.reward_std:.2f} "
+                f"| {s.success_mean:.2f} ± {s.success_std:.2f} "
+                f"| {s.steps_mean:.2f} ± {s.steps_std:.2f} "
+                f"| {s.collisions_mean:.2f} ± {s.collisions_std:.2f} |"
+            )
+    print(
+        f"\n{args.episodes} episodes per policy, seeds {FIRST_SEED}…, backend {args.backend}, "
+        f"{time.perf_counter() - start:.0f} s"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -191,8 +191,9 @@ def test_invalid_reset_options_raise(env: InsertionEnv) -> None:
         env.reset(options={"pose": [0.0, 0.0, np.nan, 1.0]})
 
 
-def test_rgb_array_render_shows_the_parts() -> None:
-    env = InsertionEnv(tolins.CircularSocket(2, 4), render_mode="rgb_array")
+@pytest.mark.parametrize("backend", ["mujoco", "kinematic"])
+def test_rgb_array_render_shows_the_parts(backend: str) -> None:
+    env = InsertionEnv(tolins.CircularSocket(2, 4), backend=backend, render_mode="rgb_array")
     env.reset(seed=0, options={"pose": [0.8, 0.5, 0.05, 1.0]})
     try:
         image = env.render()
@@ -204,3 +205,5 @@ def test_rgb_array_render_shows_the_parts() -> None:
     board_green = (image[..., 1] > image[..., 0] + 30) & (image[..., 1] > image[..., 2] + 30)
     pin_gold = (image[..., 0] > 150) & (image[..., 2] < 100)
     assert board_green.mean() > 0.1 and pin_gold.sum() > 200
+    drawn_x = env.backend.data.qpos[env.backend.model.joint("x").qposadr[0]]
+    assert drawn_x == 0.8  # the drawing model shows the backend's pose

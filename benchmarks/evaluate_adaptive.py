@@ -23,29 +23,18 @@ import gymnasium as gym
 import numpy as np
 import torch
 
-import tolins
 from tolins.inference.adaptive import InferenceGuidedPolicy
-from tolins.learning.policy import load_policy
-from tolins.policies import EXPERTS
+from tolins.learning.actors import make_actor
 from tolins.rollout import Summary, run_episode, summarise
 
 FIRST_SEED = 10_000
 VARIANTS = ("", "+lift", "+inference", "+inference_contact")
 
 
-def _make_policy(entry: str, socket):
-    if "=" not in entry:
-        return EXPERTS[entry]()
-    policy, _ = load_policy(entry.split("=", 1)[1])
-    guided = policy.architecture.kind == "tolerance_guided"
-    embedding = tolins.embedding.encode(socket) if guided else None
-    return policy.bind(embedding)
-
-
 def evaluate(entry: str, variant: str, env_id: str, episodes: int) -> tuple[Summary, float]:
     """Table 1's figures of ``entry`` (+ ``variant``) and the mean re-plans per episode."""
     env = gym.make(env_id).unwrapped
-    policy = _make_policy(entry, env.nominal_socket)
+    policy = make_actor(entry, env.nominal_socket)
     wrapper = None
     if variant:
         wrapper = InferenceGuidedPolicy(

@@ -20,27 +20,16 @@ from concurrent.futures import ThreadPoolExecutor
 import gymnasium as gym
 import torch
 
-import tolins
-from tolins.learning.policy import load_policy
-from tolins.policies import EXPERTS
+from tolins.learning.actors import make_actor
 from tolins.rollout import Summary, run_episode, summarise
 
 FIRST_SEED = 10_000
 
 
-def _make_policy(entry: str, socket):
-    if "=" not in entry:
-        return EXPERTS[entry]()
-    policy, _ = load_policy(entry.split("=", 1)[1])
-    guided = policy.architecture.kind == "tolerance_guided"
-    embedding = tolins.embedding.encode(socket) if guided else None
-    return policy.bind(embedding)
-
-
 def evaluate(entry: str, env_id: str, episodes: int, backend: str) -> Summary:
     """Table 1's figures of ``entry`` over ``episodes`` episodes from the fixed seeds."""
     env = gym.make(env_id, backend=backend).unwrapped
-    policy = _make_policy(entry, env.nominal_socket)
+    policy = make_actor(entry, env.nominal_socket)
     return summarise([run_episode(env, policy, seed=FIRST_SEED + i) for i in range(episodes)])
 
 

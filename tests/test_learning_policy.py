@@ -6,12 +6,15 @@ import numpy as np
 import pytest
 import torch
 
+from tolins import CircularSocket
+from tolins.learning.actors import make_actor
 from tolins.learning.bc import behaviour_clone
 from tolins.learning.demonstrations import collect, pairs
 from tolins.learning.discriminator import Discriminator
 from tolins.learning.policy import Policy, PolicyArchitecture, load_policy, save_policy
 from tolins.learning.policy_config import BCConfig, RSGailConfig
 from tolins.paper import A_MAX
+from tolins.policies import SafeExpert
 
 ENV = "tolins/Circle2x2-v0"
 
@@ -105,3 +108,15 @@ def test_alpha_schedule():
     assert RSGailConfig().alpha_at(50) == 0.8
     with pytest.raises(ValueError, match="alpha"):
         RSGailConfig(alpha=1.5)
+
+
+def test_make_actor_names_experts_and_saved_policies(tmp_path) -> None:
+    socket = CircularSocket(2, 2)
+    assert isinstance(make_actor("safe", socket), SafeExpert)
+    with pytest.raises(ValueError, match="unknown"):
+        make_actor("clever", socket)
+    policy = Policy(PolicyArchitecture())
+    path = save_policy(tmp_path / "policy.pt", policy, {"seed": 0})
+    actor = make_actor(f"pi={path}", socket)
+    observation = np.array([1.0, -0.5, 0.02, 10.0, 0, 0, 0, 0])
+    assert np.array_equal(actor(observation), policy.bind()(observation))

@@ -1,4 +1,5 @@
-"""Import flow: geometry depends on nothing of tolins, mjcf not on the envs or policies.
+"""Import flow: geometry depends on nothing of tolins, mjcf not on the envs or policies,
+and no layer (envs, learning, inference) on the ones above it or on record, dmc, the cli.
 
 ``import tolins.x`` runs ``tolins/__init__.py`` first, which registers the environments and
 so imports everything. Each check therefore runs in a fresh interpreter that stands in an
@@ -87,3 +88,21 @@ def test_mjcf_does_not_import_envs_or_policies(module: str) -> None:
     }
     assert not forbidden, f"{module} imports {sorted(forbidden)}"
     assert "tolins.geometry" in loaded  # the probe does see tolins imports
+
+
+_LATER_LAYERS = {
+    # module: prefixes it must not load (layers above it, and the edges)
+    "tolins.envs": ("tolins.learning", "tolins.inference", "tolins.record", "tolins.dmc"),
+    "tolins.learning.rs_gail": ("tolins.inference", "tolins.record", "tolins.dmc", "tolins.cli"),
+    "tolins.learning.autoencoder": ("tolins.inference", "tolins.record", "tolins.dmc"),
+    "tolins.inference.posterior": ("tolins.record", "tolins.dmc", "tolins.cli"),
+    "tolins.inference.adaptive": ("tolins.record", "tolins.dmc", "tolins.cli"),
+}
+
+
+@pytest.mark.parametrize("module", sorted(_LATER_LAYERS))
+def test_layers_do_not_import_the_layers_above_them(module: str) -> None:
+    loaded = _tolins(_loaded(module))
+    assert module in loaded
+    forbidden = {name for name in loaded if name.startswith(_LATER_LAYERS[module])}
+    assert not forbidden, f"{module} imports {sorted(forbidden)}"

@@ -155,21 +155,6 @@ def test_config_options_come_from_the_dataclass() -> None:
         EmbeddingTrainConfig(epochs=0)
 
 
-def test_learning_does_not_import_record_dmc_or_cli() -> None:
-    import subprocess
-    import sys
-
-    probe = (
-        "import sys, tolins; assert 'torch' not in sys.modules;"
-        "tolins.embedding; import tolins.learning.embedding_train, tolins.learning.embedding_eval;"
-        "print(sorted(m for m in sys.modules if m.startswith(('tolins.record', 'tolins.dmc',"
-        " 'tolins.cli'))))"
-    )
-    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.strip() == "[]"
-
-
 def test_embed_train_command_writes_a_loadable_checkpoint(tmp_path: Path, capsys) -> None:
     from tolins.cli import main
 

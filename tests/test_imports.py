@@ -23,14 +23,14 @@ if {bare}:
     package.__path__ = list(spec.submodule_search_locations)
     sys.modules["tolins"] = package
 import {module}
-prefixes = ("tolins.", "mujoco", "gymnasium")
+prefixes = ("tolins.", "mujoco", "gymnasium", "torch")
 names = [name for name in sys.modules if name == "tolins" or name.startswith(prefixes)]
 print(json.dumps(sorted(names)))
 """
 
 
 def _loaded(module: str, *, bare: bool = True) -> set[str]:
-    """Names of tolins (and mujoco/gymnasium) modules loaded by importing ``module``."""
+    """Names of tolins (and mujoco, gymnasium, torch) modules loaded by importing ``module``."""
     result = subprocess.run(
         [sys.executable, "-c", _PROBE.format(module=module, bare=bare)],
         capture_output=True,
@@ -90,13 +90,17 @@ def test_mjcf_does_not_import_envs_or_policies(module: str) -> None:
     assert "tolins.geometry" in loaded  # the probe does see tolins imports
 
 
+_ABOVE_LEARNING = ("tolins.inference", "tolins.record", "tolins.dmc", "tolins.cli")
+_EDGES = ("tolins.record", "tolins.dmc", "tolins.cli")
 _LATER_LAYERS = {
     # module: prefixes it must not load (layers above it, and the edges)
     "tolins.envs": ("tolins.learning", "tolins.inference", "tolins.record", "tolins.dmc"),
-    "tolins.learning.rs_gail": ("tolins.inference", "tolins.record", "tolins.dmc", "tolins.cli"),
-    "tolins.learning.autoencoder": ("tolins.inference", "tolins.record", "tolins.dmc"),
-    "tolins.inference.posterior": ("tolins.record", "tolins.dmc", "tolins.cli"),
-    "tolins.inference.adaptive": ("tolins.record", "tolins.dmc", "tolins.cli"),
+    "tolins.learning.rs_gail": _ABOVE_LEARNING,
+    "tolins.learning.autoencoder": _ABOVE_LEARNING,
+    "tolins.learning.embedding_train": _ABOVE_LEARNING,
+    "tolins.learning.embedding_eval": _ABOVE_LEARNING,
+    "tolins.inference.posterior": _EDGES,
+    "tolins.inference.adaptive": _EDGES,
 }
 
 
@@ -106,3 +110,25 @@ def test_layers_do_not_import_the_layers_above_them(module: str) -> None:
     assert module in loaded
     forbidden = {name for name in loaded if name.startswith(_LATER_LAYERS[module])}
     assert not forbidden, f"{module} imports {sorted(forbidden)}"
+
+
+def test_importing_tolins_does_not_load_torch() -> None:
+    """The embedding (torch) is imported on first use of ``tolins.embedding``."""
+    loaded = _loaded("tolins", bare=False)
+    assert "tolins.envs" in loaded
+    assert not {name for name in loaded if name.startswith("torch")}
+
+
+@pytest.mark.parametrize(
+    "module", ["tolins.inference", "tolins.inference.study", "tolins.inference.report"]
+)
+def test_inference_imports_geometry_only(module: str) -> None:
+    """``tolins.inference`` (its physics and adaptive helpers aside) needs no simulator."""
+    loaded = _loaded(module)
+    assert module in loaded
+    allowed = ("tolins.geometry", "tolins.inference", "tolins.atomic")
+    outside = {
+        name for name in _tolins(loaded) if name != "tolins" and not name.startswith(allowed)
+    }
+    assert not outside, f"{module} imports {sorted(outside)}"
+    assert not {name for name in loaded if name.startswith("mujoco")}

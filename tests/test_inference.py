@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -162,22 +160,3 @@ def test_physics_contact_evidence_matches_geometry() -> None:
         inside = pins_inside(SPEC, eps, goal)
         assert inserted == inside.all()
         assert inserted or np.array_equal(blocked, ~inside)
-
-
-def test_inference_imports_geometry_only() -> None:
-    """``tolins.inference`` (physics helper aside) loads no envs, learning, record or cli."""
-    probe = (
-        "import importlib.util, json, sys, types\n"
-        "spec = importlib.util.find_spec('tolins')\n"
-        "package = types.ModuleType('tolins')\n"
-        "package.__path__ = list(spec.submodule_search_locations)\n"
-        "sys.modules['tolins'] = package\n"
-        "import tolins.inference, tolins.inference.study, tolins.inference.report\n"
-        "print(json.dumps(sorted(n for n in sys.modules if n.startswith(('tolins.', 'mujoco')))))"
-    )
-    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
-    loaded = json.loads(result.stdout.strip().splitlines()[-1])
-    allowed = ("tolins.geometry", "tolins.inference", "tolins.atomic")
-    outside = [n for n in loaded if not n.startswith(allowed)]
-    assert not outside, outside

@@ -98,6 +98,11 @@ def test_resume_continues_to_the_identical_result(demos, bc_policy, tmp_path):
     np.testing.assert_array_equal(whole.policy.get_flat(), resumed.policy.get_flat())
     assert _figures(whole.history) == _figures(resumed.history)
     assert whole.final == resumed.final
+    # the parameters over training (Fig. 4a) survive the interruption too
+    assert whole.means.shape == (7, bc_policy.size)
+    np.testing.assert_array_equal(whole.means, resumed.means)
+    np.testing.assert_array_equal(whole.means[0], bc_policy.get_flat())
+    np.testing.assert_array_equal(whole.means[-1], whole.policy.get_flat())
 
 
 def test_stop_rule_ends_a_stalled_run(demos, bc_policy, tmp_path):

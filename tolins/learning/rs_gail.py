@@ -74,6 +74,9 @@ class RSGailResult:
     stopped: str
     final: dict[str, float]
     """Reward, success, collisions and D(student) of the returned policy on the eval seeds."""
+    means: np.ndarray
+    """``(iterations + 1, size)``: the CMA-ES mean evaluated in each history row, then the
+    returned policy's parameters (the trajectories over training, the paper's Fig. 4a)."""
 
 
 def episode_seed(*key: int) -> int:
@@ -166,8 +169,9 @@ def train_rs_gail(
     if resume and path.exists():
         state = _load(path, metadata, discriminator)
         es, start, history = state["es"], state["iteration"], state["history"]
+        means = state["means"]
     else:
-        es, start, history = _make_es(policy.get_flat(), config, seed), 0, []
+        es, start, history, means = _make_es(policy.get_flat(), config, seed), 0, [], []
     eval_seeds = [episode_seed(seed, _EVAL, e) for e in range(config.eval_episodes)]
     stopped = "iterations"
     bar = tqdm(total=config.iterations, initial=start, desc="RS-GAIL", disable=not progress)
@@ -175,6 +179,7 @@ def train_rs_gail(
         for i in range(start, config.iterations):
             began = time.perf_counter()
             alpha = config.alpha_at(i)
+            means.append(np.array(es.mean, dtype=float))
             mean = policy.with_flat(es.mean)
             current = runner.run(mean, eval_seeds)
             if i % config.discriminator_every == 0:
@@ -188,7 +193,7 @@ def train_rs_gail(
             es.tell(candidates, [-f for f in fitness])
             row = _row(i, alpha, current, discriminator, fitness, es, episodes, began)
             history.append(row)
-            _save(path, es, i + 1, history, discriminator, metadata)
+            _save(path, es, i + 1, history, means, discriminator, metadata)
             write_curves_csv(out / "curves.csv", history)
             bar.set_postfix(
                 reward=f"{row['reward']:.1f}",
@@ -205,7 +210,8 @@ def train_rs_gail(
     policy.set_flat(es.mean)
     with single_threaded_torch():
         final = _summary(runner.run(policy, eval_seeds), discriminator)
-    return RSGailResult(policy, history, stopped, final)
+    snapshots = np.array([*means[: len(history)], policy.get_flat()])
+    return RSGailResult(policy, history, stopped, final, snapshots)
 
 
 def _summary(current: list[Rollout], discriminator: Discriminator) -> dict[str, float]:
@@ -231,7 +237,7 @@ def _row(i, alpha, current, discriminator, fitness, es, episodes, began) -> dict
     }
 
 
-def _save(path, es, iteration, history, discriminator, metadata) -> None:
+def _save(path, es, iteration, history, means, discriminator, metadata) -> None:
     buffer = io.BytesIO()
     pickle.dump(es, buffer)
     atomic_torch_save(
@@ -241,6 +247,7 @@ def _save(path, es, iteration, history, discriminator, metadata) -> None:
             "metadata": metadata,
             "iteration": iteration,
             "history": history,
+            "means": torch.as_tensor(np.array(means)),
             "es": torch.frombuffer(bytearray(buffer.getvalue()), dtype=torch.uint8),
             "discriminator": discriminator.full_state(),
         },
@@ -255,4 +262,10 @@ def _load(path: Path, metadata: dict[str, Any], discriminator: Discriminator) ->
         raise ValueError(f"{path} was written by another run configuration; cannot resume it")
     discriminator.load_full_state(payload["discriminator"])
     es = pickle.loads(payload["es"].numpy().tobytes())  # our own file, written by _save
-    return {"es": es, "iteration": payload["iteration"], "history": payload["history"]}
+    means = list(payload["means"].numpy())
+    return {
+        "es": es,
+        "iteration": payload["iteration"],
+        "history": payload["history"],
+        "means": means,
+    }

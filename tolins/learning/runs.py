@@ -1,6 +1,7 @@
 """``tolins train bc|rs-gail|tolerance-guided``: whole runs that write their artefacts.
 
-Every artefact (``policy.pt``, ``checkpoint.pt``, ``run.json``) records the configs, the
+Every artefact (``policy.pt``, ``checkpoint.pt``, ``run.json``; RS-GAIL runs also
+``means.npy``, the policy's parameters over training) records the configs, the
 seed and ``tolins.__version__`` (:func:`tolins.learning.artefacts.run_metadata`).
 """
 
@@ -9,6 +10,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from tolins.atomic import atomic_write
 from tolins.learning.artefacts import atomic_json, run_metadata
 from tolins.learning.bc import BCResult, behaviour_clone
 from tolins.learning.curves import plot_curves, write_curves_csv
@@ -17,6 +21,9 @@ from tolins.learning.policy import load_policy, save_policy
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
 from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
 from tolins.learning.tolerance_guided import train_tolerance_guided, workpieces
+
+#: The CMA-ES mean of every iteration, then the final policy's parameters (``.npy``).
+MEANS = "means.npy"
 
 
 def demonstrations(env_ids: list[str], task: TaskConfig) -> list[Rollout]:
@@ -122,6 +129,7 @@ def run_tolerance_guided(
 
 def _finish(out: Path, result: RSGailResult, metadata: dict[str, Any], title: str) -> None:
     save_policy(out / "policy.pt", result.policy, metadata)
+    atomic_write(out / MEANS, lambda file: np.save(file, result.means))
     if result.history:
         plot_curves(out / "curves.png", result.history, title)
     summary = {"stopped": result.stopped, "iterations": len(result.history), "final": result.final}

@@ -183,7 +183,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_embed(commands)
     _add_infer_study(commands)
     _add_train(commands)
+    _add_bench(commands)
     return parser
+
+
+def _add_bench(commands: argparse._SubParsersAction) -> None:
+    from tolins.bench.cli import add_bench_parser
+
+    add_bench_parser(commands)
 
 
 def _add_train(commands: argparse._SubParsersAction) -> None:

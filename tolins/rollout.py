@@ -70,3 +70,15 @@ def summarise(episodes: list[Episode]) -> Summary:
         stats[f"{name}_mean"] = float(np.mean(values))
         stats[f"{name}_std"] = float(np.std(values))
     return Summary(len(episodes), **stats, faults=sum(e.error is not None for e in episodes))
+
+
+def episode_poses(env: gym.Env, policy: Policy, seed: int | None = None) -> np.ndarray:
+    """The workpiece poses ``(steps + 1, 4)`` = ``[x, y, theta, z]`` of one episode, from
+    the initial pose to the last."""
+    observation, info = env.reset(seed=seed)
+    poses, done = [info["pose"]], False
+    while not done:
+        observation, _, terminated, truncated, info = env.step(policy(observation))
+        poses.append(info["pose"])
+        done = terminated or truncated
+    return np.array(poses)

@@ -1,0 +1,60 @@
+"""``tolins bench``: the command-line face of :func:`tolins.bench.runner.run_bench`."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tolins.bench.config import BACKENDS, BenchConfig
+from tolins.bench.profiles import PROFILES
+
+
+def add_bench_parser(commands: argparse._SubParsersAction) -> None:
+    """Add ``bench`` to the ``tolins`` parser."""
+    bench = commands.add_parser(
+        "bench",
+        help="train and evaluate the paper's Table 1 and its inference study, with reports",
+        description="Train what each row of the paper's Table 1 needs, evaluate every row "
+        "and run the inference study; write results.json, results.md, plots and rerun "
+        "recordings into --out. Stages are cached by config hash: an interrupted run "
+        "resumes, a finished one is only re-reported.",
+    )
+    bench.add_argument(
+        "--profile",
+        default="quick",
+        choices=list(PROFILES),
+        help="budgets: quick (≤ 15 min on 2 cores), paper (the paper's), tiny (smoke test)",
+    )
+    bench.add_argument("--rows", help="comma-separated row ids, e.g. C2.1,C2.3 (default: all)")
+    bench.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
+    bench.add_argument("--seeds", type=int, help="training seeds (default: the profile's)")
+    bench.add_argument("--out", help="output folder (default: results/PROFILE)")
+    bench.add_argument("--workers", type=int, default=2, help="evaluation threads")
+    bench.add_argument("--no-study", action="store_true", help="skip the inference study")
+    bench.set_defaults(run=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from tolins.bench.report import format_claims, format_results_table
+    from tolins.bench.runner import run_bench
+
+    try:
+        config = BenchConfig(
+            profile=args.profile,
+            rows=args.rows,
+            backend=args.backend,
+            seeds=args.seeds,
+            out=args.out or str(Path("results") / args.profile),
+            study=not args.no_study,
+            workers=args.workers,
+        )
+        run = run_bench(config)
+    except (ValueError, FileNotFoundError) as error:
+        print(f"tolins bench: {error}", file=sys.stderr)
+        return 2
+    print(format_results_table(run.results))
+    print("\nThe paper's claims in this run:")
+    print(format_claims(run.claims))
+    print(f"\n{run.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json and plots")
+    return 0

@@ -1,0 +1,64 @@
+"""What ``tolins bench`` runs (:class:`BenchConfig`) and what a run produced (:class:`BenchRun`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tolins.bench.claims import ClaimCheck
+from tolins.bench.profiles import PROFILES, Profile
+from tolins.bench.table import select_rows
+
+BACKENDS = ("mujoco", "kinematic")
+RECORDING = "episodes.rrd"
+EPISODES = "episodes.json"
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """What ``tolins bench`` runs.
+
+    Attributes:
+        profile: ``quick`` (default, ≤ 15 min on 2 cores), ``paper`` or ``tiny``.
+        rows: Row ids (comma-separated), ``None`` for all 15.
+        backend: ``mujoco`` (contact physics) or ``kinematic`` (the paper's simulator).
+        seeds: Training seeds; ``None``: the profile's.
+        out: Output folder.
+        study: Run the inference study.
+        workers: Threads evaluating rows side by side (results do not depend on it).
+    """
+
+    profile: str = "quick"
+    rows: str | None = None
+    backend: str = "mujoco"
+    seeds: int | None = None
+    out: str = "bench"
+    study: bool = True
+    workers: int = 2
+
+    def __post_init__(self) -> None:
+        if self.profile not in PROFILES:
+            raise ValueError(f"profile={self.profile!r}; allowed: {', '.join(PROFILES)}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend={self.backend!r}; allowed: {', '.join(BACKENDS)}")
+        if self.seeds is not None and (not isinstance(self.seeds, int) or self.seeds < 1):
+            raise ValueError(f"seeds={self.seeds!r}; allowed: an integer ≥ 1")
+        if not isinstance(self.workers, int) or self.workers < 1:
+            raise ValueError(f"workers={self.workers!r}; allowed: an integer ≥ 1")
+        select_rows(self.rows)  # raises on unknown ids
+
+
+@dataclass
+class BenchRun:
+    """What a run produced: the entries of ``results.json``, the claims, the study."""
+
+    config: BenchConfig
+    profile: Profile
+    results: dict[str, dict[str, Any]]
+    claims: list[ClaimCheck]
+    study: dict[str, Any] | None
+    wall_s: float
+    stage_wall_s: dict[str, float] = field(default_factory=dict)
+    cached: list[str] = field(default_factory=list)
+    stage_folders: dict[str, Path] = field(default_factory=dict)

@@ -1,0 +1,116 @@
+"""The benchmark's figures (matplotlib, Agg, written atomically as PNG)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tolins.atomic import atomic_write
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.tolerance import NO_TOLERANCE, WINDOWS, image
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(figure, path: str | Path) -> Path:
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=100)
+    _pyplot().close(figure)
+    return atomic_write(path, lambda file: file.write(buffer.getvalue()))
+
+
+def plot_table(
+    path: str | Path,
+    results: dict[str, dict[str, Any]],
+    paper: dict[str, dict[str, tuple[float, float]]],
+) -> Path:
+    """Reward and success rate of every row, this run beside the paper."""
+    plt = _pyplot()
+    rows = list(results)
+    x = np.arange(len(rows))
+    figure, axes = plt.subplots(2, 1, figsize=(max(6, 0.7 * len(rows) + 2), 6), sharex=True)
+    for axis, figure_name in zip(axes, ("reward", "success"), strict=True):
+        ours = [results[r][f"{figure_name}_mean"] for r in rows]
+        ours_std = [results[r][f"{figure_name}_std"] for r in rows]
+        theirs = [paper[r][figure_name][0] for r in rows]
+        theirs_std = [paper[r][figure_name][1] for r in rows]
+        axis.bar(x - 0.2, ours, 0.4, yerr=ours_std, label="tolins", capsize=2)
+        axis.bar(x + 0.2, theirs, 0.4, yerr=theirs_std, label="paper", capsize=2, alpha=0.7)
+        axis.set_ylabel("success rate" if figure_name == "success" else "reward")
+        axis.grid(axis="y", alpha=0.3)
+    axes[0].legend()
+    axes[1].set_xticks(x, rows)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+def plot_learning_curves(path: str | Path, curves: dict[str, list[dict[str, float]]]) -> Path:
+    """RS-GAIL's curves (reward, success, D(student) of the CMA-ES mean), one line per run."""
+    plt = _pyplot()
+    panels = (("reward", "env reward"), ("success", "success rate"), ("d_expert", "D(student)"))
+    figure, axes = plt.subplots(1, 3, figsize=(14, 3.6), constrained_layout=True)
+    for label, history in curves.items():
+        iterations = [row["iteration"] for row in history]
+        for axis, (key, _) in zip(axes, panels, strict=True):
+            axis.plot(iterations, [row[key] for row in history], marker=".", label=label)
+    for axis, (_, name) in zip(axes, panels, strict=True):
+        axis.set_xlabel("RS-GAIL iteration")
+        axis.set_ylabel(name)
+        axis.grid(alpha=0.3)
+    axes[2].axhspan(0.4, 0.6, color="tab:green", alpha=0.12)
+    axes[0].legend(fontsize=7)
+    return _save(figure, path)
+
+
+def plot_training_trajectories(
+    path: str | Path,
+    trajectories: dict[str, np.ndarray],
+    title: str,
+) -> Path:
+    """Pose trajectories ``(steps, 4)`` of one episode per label (the paper's Fig. 4a):
+    top view (x, y) and the approach (horizontal distance to the goal against z)."""
+    plt = _pyplot()
+    figure, (top, side) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, max(len(trajectories), 1)))
+    for (label, poses), colour in zip(trajectories.items(), colours, strict=False):
+        style = {"color": "black", "ls": "--"} if label.startswith("expert") else {"color": colour}
+        top.plot(poses[:, 0], poses[:, 1], marker=".", ms=3, label=label, **style)
+        side.plot(np.hypot(poses[:, 0], poses[:, 1]), poses[:, 3], marker=".", ms=3, **style)
+        top.plot(*poses[0, :2], "o", color=style["color"], ms=5)
+    top.plot(0, 0, "r+", ms=14, mew=2, label="goal")
+    top.set(xlabel="x (mm)", ylabel="y (mm)", title="top view")
+    top.set_aspect("equal", adjustable="datalim")
+    side.axhline(0.0, color="grey", lw=1)
+    side.set(xlabel="distance to the goal in x-y (mm)", ylabel="z (mm)", title="approach")
+    for axis in (top, side):
+        axis.grid(alpha=0.3)
+    top.legend(fontsize=7)
+    figure.suptitle(title)
+    return _save(figure, path)
+
+
+def plot_tolerance_images(path: str | Path, specs: dict[str, SocketSpec]) -> Path:
+    """The flattened tolerance (largest θ per x-y cell) of each workpiece."""
+    plt = _pyplot()
+    figure, axes = plt.subplots(
+        1, len(specs), figsize=(2.6 * len(specs), 2.9), constrained_layout=True, squeeze=False
+    )
+    for axis, (label, spec) in zip(axes[0], specs.items(), strict=True):
+        window = WINDOWS[spec.family]
+        values = np.ma.masked_equal(image(spec, 64), NO_TOLERANCE)
+        extent = [-window.half_width, window.half_width] * 2
+        picture = axis.imshow(values, origin="lower", extent=extent, cmap="viridis", vmin=0)
+        axis.set(title=label, xlabel="x (mm)")
+        figure.colorbar(picture, ax=axis, shrink=0.8, label="θ (rad)")
+    axes[0][0].set_ylabel("y (mm)")
+    return _save(figure, path)

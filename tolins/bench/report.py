@@ -1,0 +1,293 @@
+"""The files of a benchmark run: ``results.json``, ``results.md``, ``run.json``, plots,
+recordings and the inference study, all rewritten from the finished stages."""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tolins.atomic import atomic_write
+from tolins.bench import plots
+from tolins.bench.claims import ClaimCheck
+from tolins.bench.config import BACKENDS, RECORDING, BenchRun
+from tolins.bench.evaluation import FIRST_SEED
+from tolins.bench.table import PAPER, ROWS, TRAININGS
+from tolins.bench.training import Trainer
+from tolins.envs.tasks import TASKS
+
+_FIGURES = (("reward", 2), ("success", 2), ("steps", 2), ("collisions", 2))
+
+
+def write_json(path: Path, data: Any) -> Path:
+    text = json.dumps(data, indent=2)
+    return atomic_write(path, lambda file: file.write(text + "\n"), mode="w")
+
+
+def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
+    """Write every output of ``run`` into ``run.config.out``; the paths written."""
+    out = Path(run.config.out)
+    backend = run.config.backend
+    written = [
+        write_json(out / "results.json", run.results),
+        write_json(out / f"results.{backend}.json", run.results),
+    ]
+    if run.study is not None:
+        written.append(write_json(out / "inference.json", run.study))
+        written.append(_copy(run.stage_folders["inference-study"] / "inference_study.png", out))
+    written += _recordings(run, out)
+    written += _figures(run, trainer, out)
+    written.append(write_json(out / "run.json", _run_record(run, seeds)))
+    text = format_markdown(run, _other_backend(out, backend))
+    written.append(atomic_write(out / "results.md", lambda file: file.write(text), mode="w"))
+    return written
+
+
+def _copy(source: Path, folder: Path, name: str | None = None) -> Path:
+    data = source.read_bytes()
+    return atomic_write(folder / (name or source.name), lambda file: file.write(data))
+
+
+def _recordings(run: BenchRun, out: Path) -> list[Path]:
+    written = []
+    for row_id in run.results:
+        source = run.stage_folders[f"eval-{row_id}-seed0"] / RECORDING
+        if source.is_file():
+            written.append(_copy(source, out / "recordings", f"{row_id}.rrd"))
+    return written
+
+
+def _other_backend(out: Path, backend: str) -> tuple[str, dict[str, Any]] | None:
+    other = next(b for b in BACKENDS if b != backend)
+    path = out / f"results.{other}.json"
+    return (other, json.loads(path.read_text())) if path.is_file() else None
+
+
+def _run_record(run: BenchRun, seeds: int) -> dict[str, Any]:
+    import mujoco
+    import torch
+
+    import tolins
+
+    return {
+        "date": datetime.date.today().isoformat(),
+        "config": asdict(run.config),
+        "profile": asdict(run.profile),
+        "seeds": seeds,
+        "wall_s": run.wall_s,
+        "stage_wall_s": run.stage_wall_s,
+        "cached_stages": run.cached,
+        "claims": {check.claim.name: check.to_json() for check in run.claims},
+        "versions": {
+            "tolins": tolins.__version__,
+            "mujoco": mujoco.__version__,
+            "torch": torch.__version__,
+        },
+    }
+
+
+# --- figures -------------------------------------------------------------------------
+
+
+def _figures(run: BenchRun, trainer: Trainer, out: Path) -> list[Path]:
+    results = run.results
+    written = [plots.plot_table(out / "table.png", results, PAPER)]
+    curves = _learning_curves(run)
+    if curves:
+        written.append(plots.plot_learning_curves(out / "learning_curves.png", curves))
+    trajectories = _training_trajectories(run, trainer)
+    if trajectories is not None:
+        written.append(trajectories)
+    env_ids = []
+    for row in ROWS:
+        if row.id in results:
+            env_ids += [*(t for tr in row.trainings for t in tr.env_ids), row.eval_env]
+    sockets = {t.name: t.socket for t in TASKS if t.gym_id in env_ids}
+    written.append(plots.plot_tolerance_images(out / "tolerance_images.png", sockets))
+    return written
+
+
+def _learning_curves(run: BenchRun) -> dict[str, list[dict[str, float]]]:
+    curves = {}
+    for stage, folder in run.stage_folders.items():
+        path = folder / "curves.csv"
+        if stage.startswith("pi_") and path.is_file():
+            with open(path) as file:
+                curves[stage] = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(file)]
+    return curves
+
+
+def _training_trajectories(run: BenchRun, trainer: Trainer) -> Path | None:
+    """The paper's Fig. 4a: one episode of π_n (safe expert, 2*2, seed 0) at iterations
+    across its training, beside the expert's."""
+    import gymnasium as gym
+
+    from tolins.learning.policy import load_policy
+    from tolins.learning.runs import MEANS
+    from tolins.policies import EXPERTS
+    from tolins.rollout import episode_poses
+
+    folder = run.stage_folders.get(trainer.stage_name("pi_n_safe", 0))
+    if folder is None or not (folder / MEANS).is_file():
+        return None
+    training = TRAININGS["pi_n_safe"]
+    policy, _ = load_policy(folder / "policy.pt", kind="nominal")
+    means = np.load(folder / MEANS)
+    last = len(means) - 1
+    picks = sorted(set(np.linspace(0, last, 5).round().astype(int).tolist()))
+    env = gym.make(training.env_ids[0], backend=run.config.backend)
+    trajectories = {"expert (safe)": episode_poses(env, EXPERTS["safe"](), FIRST_SEED)}
+    for k in picks:
+        label = "π_bc (iteration 0)" if k == 0 else f"iteration {k}"
+        actor = policy.with_flat(means[k]).bind()
+        trajectories[label] = episode_poses(env, actor, FIRST_SEED)
+    env.close()
+    title = f"π_n over RS-GAIL training on {training.env_ids[0]} ({run.config.backend})"
+    path = Path(run.config.out) / "trajectories.png"
+    return plots.plot_training_trajectories(path, trajectories, title)
+
+
+# --- Markdown ------------------------------------------------------------------------
+
+
+def _pm(mean: float, std: float, digits: int = 2) -> str:
+    return f"{mean:.{digits}f} ± {std:.{digits}f}"
+
+
+def format_results_table(results: dict[str, dict[str, Any]]) -> str:
+    """Table 1 as Markdown: each figure of this run beside the paper's."""
+    header = "| ID | policy | train env | eval env |"
+    rule = "|---|---|---|---|"
+    for name, _ in _FIGURES:
+        header += f" {name} | paper |"
+        rule += "---|---|"
+    lines = [header, rule]
+    for row_id, entry in results.items():
+        cells = [row_id, entry["policy"], entry["train_env"], _short(entry["eval_env"])]
+        for name, digits in _FIGURES:
+            paper = PAPER[row_id][name]
+            cells += [_pm(entry[f"{name}_mean"], entry[f"{name}_std"], digits), _pm(*paper)]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def format_claims(claims: list[ClaimCheck]) -> str:
+    """One bullet per claim: the verdict and the reward comparisons behind it."""
+    lines = []
+    for check in claims:
+        evidence = "; ".join(c.describe() for c in check.comparisons) or "rows not run"
+        lines.append(f"- **{check.claim.statement}: {check.verdict}.** {evidence}")
+    return "\n".join(lines)
+
+
+def format_backends(
+    backend: str, results: dict[str, Any], other: str, other_results: dict[str, Any]
+) -> str:
+    """Each row's figures on both backends and the change the contact physics makes."""
+    physics, kinematic = (
+        (results, other_results) if backend == "mujoco" else (other_results, results)
+    )
+    lines = [
+        "| ID | policy | eval env | reward mujoco | reward kinematic | success mujoco "
+        "| success kinematic | steps mujoco | steps kinematic | collisions mujoco "
+        "| collisions kinematic |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row_id, entry in physics.items():
+        if row_id not in kinematic:
+            continue
+        cells = [row_id, entry["policy"], _short(entry["eval_env"])]
+        for name, digits in _FIGURES:
+            cells += [f"{physics[row_id][f'{name}_mean']:.{digits}f}"]
+            cells += [f"{kinematic[row_id][f'{name}_mean']:.{digits}f}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = None) -> str:
+    """``results.md``: the table beside the paper, the claims, the study, the figures."""
+    config = run.config
+    seeds = run.results[next(iter(run.results))]["seeds"] if run.results else 0
+    episodes = run.profile.eval_episodes
+    parts = [
+        f"# tolins bench: Table 1 on the {config.backend} backend ({config.profile} profile)",
+        "",
+        f"{datetime.date.today().isoformat()}, `{_command(config)}`, "
+        f"{run.wall_s / 60:.1f} min wall time ({len(run.cached)} cached stages). "
+        f"{seeds} training seed(s), {episodes} evaluation episodes per row and seed "
+        f"(seeds {FIRST_SEED}…); ± is the std over "
+        f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs).",
+        "",
+        format_results_table(run.results),
+        "",
+        "![reward and success beside the paper](table.png)",
+        "",
+        "## The paper's claims in this run",
+        "",
+        format_claims(run.claims),
+    ]
+    if run.study is not None:
+        parts += ["", "## Inference study", "", _format_study(run.study), ""]
+        parts += ["![inference study](inference_study.png)"]
+    if other is not None:
+        parts += [
+            "",
+            f"## Backends side by side ({config.backend} vs {other[0]})",
+            "",
+            "Means of the same pipeline on MuJoCo contact physics and on the paper's "
+            f"kinematic simulator (`results.{other[0]}.json` from an earlier run in this "
+            "folder).",
+            "",
+            format_backends(config.backend, run.results, *other),
+        ]
+    parts += [
+        "",
+        "## Figures and recordings",
+        "",
+        "- `learning_curves.png`: RS-GAIL's curves of every trained policy.",
+        "- `trajectories.png`: π_n's trajectories over training (the paper's Fig. 4a).",
+        "- `tolerance_images.png`: the tolerance images of the workpieces.",
+        "- `recordings/{ID}.rrd`: evaluation episodes of each row; "
+        "`tolins replay recordings/C2.3.rrd`.",
+        "",
+    ]
+    return "\n".join(parts)
+
+
+def _format_study(study: dict[str, Any]) -> str:
+    from tolins.inference.study import PAPER as STUDY_PAPER
+
+    lines = [
+        f"Realised: {study['nominal_insertable']:.1%} insert at the nominal goal, "
+        f"{study['impossible']:.1%} nowhere.",
+        "",
+        "| method | inserted within 10 attempts | mean attempts | paper |",
+        "|---|---|---|---|",
+    ]
+    for method, figures in study["methods"].items():
+        paper = STUDY_PAPER.get(method)
+        reference = f"{paper[0]:.1%} at {paper[1]:.3f}" if paper else "—"
+        lines.append(
+            f"| {method} | {figures['success_within_10']:.1%} "
+            f"| {figures['mean_attempts']:.3f} | {reference} |"
+        )
+    return "\n".join(lines)
+
+
+def _short(env_id: str) -> str:
+    return env_id.removeprefix("tolins/").removesuffix("-v0")
+
+
+def _command(config) -> str:
+    parts = ["tolins bench", f"--profile {config.profile}", f"--backend {config.backend}"]
+    if config.rows:
+        parts.append(f"--rows {config.rows}")
+    if config.seeds:
+        parts.append(f"--seeds {config.seeds}")
+    parts.append(f"--out {config.out}")
+    return " ".join(parts)

@@ -135,6 +135,19 @@ def test_tiny_study_schema_ranking_and_worker_independence() -> None:
     assert all(np.array_equal(result.attempts[k], two.attempts[k]) for k in config.methods)
 
 
+def test_a_methods_result_does_not_depend_on_the_other_methods() -> None:
+    """Each method draws from its own stream, keyed by the method, not by its position."""
+    both = run_study(
+        StudyConfig(samples=10, seed=4, particles=200, workers=1, methods=("random", "inference"))
+    )
+    alone = run_study(
+        StudyConfig(samples=10, seed=4, particles=200, workers=1, methods=("inference",))
+    )
+    assert np.array_equal(both.attempts["inference"], alone.attempts["inference"])
+    first = run_study(StudyConfig(samples=10, seed=4, workers=1, methods=("random",)))
+    assert np.array_equal(both.attempts["random"], first.attempts["random"])
+
+
 def test_cli_smoke(tmp_path, capsys) -> None:
     out, plot = tmp_path / "study.json", tmp_path / "study.png"
     code = main(

@@ -143,10 +143,17 @@ Outcome = Callable[[np.ndarray], np.ndarray]
 def _workpiece(job: tuple[StudyConfig, int, np.ndarray]) -> dict[str, int]:
     config, index, eps = job
     outcome = _physics_outcome(eps) if config.physics else _geometry_outcome(eps)
+    # Each method's stream is keyed by its place in METHODS, not in config.methods, so a
+    # method's result does not depend on which other methods run.
     return {
-        m: _attempts(m, outcome, eps, config, np.random.default_rng([config.seed, index, i + 1]))
-        for i, m in enumerate(config.methods)
+        m: _attempts(m, outcome, eps, config, _method_rng(config.seed, index, m))
+        for m in config.methods
     }
+
+
+def _method_rng(seed: int, index: int, method: str) -> np.random.Generator:
+    """The draws of ``method`` on workpiece ``index``."""
+    return np.random.default_rng([seed, index, METHODS.index(method) + 1])
 
 
 def _geometry_outcome(eps: np.ndarray) -> Outcome:

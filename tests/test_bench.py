@@ -1,0 +1,222 @@
+"""The benchmark suite: claims check, figures per row, the stage cache, whole tiny runs."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tolins.bench.claims import CLAIMS, HELD, NOT_EVALUATED, NOT_HELD, check_claims
+from tolins.bench.config import BenchConfig
+from tolins.bench.results import row_entry
+from tolins.bench.runner import run_bench
+from tolins.bench.stages import MARKER, StageCache, stage_key
+from tolins.bench.table import PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
+from tolins.cli import main
+from tolins.record import check_rrd
+from tolins.rollout import Episode
+
+SCHEMA = {
+    "policy",
+    "train_env",
+    "eval_env",
+    "reward_mean",
+    "reward_std",
+    "success_mean",
+    "success_std",
+    "steps_mean",
+    "steps_std",
+    "collisions_mean",
+    "collisions_std",
+    "episodes",
+    "seeds",
+}
+
+
+def _synthetic(rewards: dict[str, float], std: float = 1.0, episodes: int = 100) -> dict:
+    """results.json entries with the given mean rewards (the paper's figures elsewhere)."""
+    return {
+        row_id: {"reward_mean": reward, "reward_std": std, "episodes": episodes, "seeds": 1}
+        for row_id, reward in rewards.items()
+    }
+
+
+def _paper_rewards() -> dict[str, float]:
+    return {row_id: figures["reward"][0] for row_id, figures in PAPER.items()}
+
+
+# --- the claims check ------------------------------------------------------------------
+
+
+def test_every_claim_holds_on_the_papers_own_table():
+    checks = check_claims(_synthetic(_paper_rewards()))
+    assert [c.verdict for c in checks] == [HELD] * len(CLAIMS)
+    rs_gail = checks[0]
+    assert len(rs_gail.comparisons) == 6
+    assert rs_gail.comparisons[0].describe().startswith("C1.3 20.82 vs C1.1 13.76: +7.06 ± 0.14")
+
+
+@pytest.mark.parametrize(
+    ("row_id", "claim"),
+    [
+        ("C1.2", "rs_gail"),
+        ("C3.1", "tolerance_guided"),
+        ("C4.1", "inference"),
+        ("P2.1", "polygon_transfer"),
+    ],
+)
+def test_a_claim_did_not_hold_when_its_baseline_wins(row_id, claim):
+    rewards = _paper_rewards()
+    rewards[row_id] = 30.0  # the baseline beats the paper's winner
+    verdicts = {c.claim.name: c.verdict for c in check_claims(_synthetic(rewards))}
+    assert verdicts[claim] == NOT_HELD
+    assert [v for name, v in verdicts.items() if name != claim] == [HELD] * 3
+
+
+def test_a_tie_does_not_hold_and_a_missing_row_is_not_evaluated():
+    rewards = _paper_rewards()
+    rewards["C3.2"] = rewards["C3.1"]
+    del rewards["P2.2"]
+    checks = {c.claim.name: c for c in check_claims(_synthetic(rewards))}
+    assert checks["tolerance_guided"].verdict == NOT_HELD
+    assert checks["polygon_transfer"].verdict == NOT_EVALUATED
+    assert checks["polygon_transfer"].to_json()["evidence"] == []
+
+
+# --- one row's figures --------------------------------------------------------------------
+
+
+def _episodes(rewards, success=True):
+    return [Episode(float(r), success, 30 + i, i % 3) for i, r in enumerate(rewards)]
+
+
+def test_row_entry_one_seed_spreads_over_episodes():
+    entry = row_entry(ROWS[0], [_episodes([10, 20, 30])])
+    assert SCHEMA <= set(entry)
+    assert entry["reward_mean"] == 20 and entry["reward_std"] == pytest.approx(np.std([10, 20, 30]))
+    assert entry["steps_mean"] == 31 and entry["success_mean"] == 1.0
+    assert (entry["episodes"], entry["seeds"], entry["std_over"]) == (3, 1, "episodes")
+
+
+def test_row_entry_several_seeds_spread_over_the_seed_means():
+    entry = row_entry(ROWS[0], [_episodes([10, 20]), _episodes([30, 50])])
+    assert entry["reward_mean"] == 27.5
+    assert entry["reward_std"] == pytest.approx(np.std([15, 40]))
+    assert (entry["episodes"], entry["seeds"], entry["std_over"]) == (4, 2, "seeds")
+    with pytest.raises(ValueError, match="no episodes"):
+        row_entry(ROWS[0], [_episodes([1.0]), []])
+
+
+# --- the table and the configuration -------------------------------------------------------
+
+
+def test_table_has_the_papers_15_rows_and_their_trainings():
+    assert ROW_IDS == tuple(PAPER)
+    assert len(ROWS) == 15
+    by_id = {row.id: row for row in ROWS}
+    assert [t.name for t in by_id["C3.2"].trainings] == ["bc_safe", "pi_n_safe", "pi_phi_circle"]
+    assert by_id["C4.2"].inference and by_id["C4.2"].agent == by_id["C4.1"].agent
+    assert by_id["C3.1"].agent == by_id["C2.3"].agent  # the paper: the same policy
+    assert by_id["C1.1"].trainings == []
+    assert TRAININGS["pi_phi_polygon"].env_ids == ("tolins/Square-v0", "tolins/Hexagon-v0")
+
+
+def test_bad_rows_profiles_backends_and_seeds_are_refused():
+    assert [r.id for r in select_rows("P2.2, C1.1")] == ["C1.1", "P2.2"]
+    with pytest.raises(ValueError, match="'C9.9'.*allowed: C1.1"):
+        select_rows("C1.1,C9.9")
+    with pytest.raises(ValueError, match="profile='fast'; allowed: paper, quick, tiny"):
+        BenchConfig(profile="fast")
+    with pytest.raises(ValueError, match="backend='bullet'; allowed: mujoco, kinematic"):
+        BenchConfig(backend="bullet")
+    with pytest.raises(ValueError, match="seeds=0"):
+        BenchConfig(seeds=0)
+
+
+def test_cli_reports_a_bad_row_and_exits_2(capsys, tmp_path):
+    assert main(["bench", "--rows", "C7.1", "--out", str(tmp_path)]) == 2
+    assert "tolins bench: rows ['C7.1'] are unknown" in capsys.readouterr().err
+    assert not (tmp_path / "stages").exists()
+
+
+# --- the stage cache -------------------------------------------------------------------
+
+
+def test_stage_key_ignores_key_order_and_sees_every_value():
+    assert stage_key({"a": 1, "b": [1, 2]}) == stage_key({"b": [1, 2], "a": 1})
+    assert stage_key({"a": 1, "b": [1, 2]}) != stage_key({"a": 1, "b": [2, 1]})
+
+
+def test_a_stage_runs_once_and_an_interrupted_one_runs_again(tmp_path):
+    cache = StageCache(tmp_path)
+    calls = []
+
+    def fail(folder: Path) -> None:
+        (folder / "half.txt").write_text("half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        cache.run("train", {"x": 1}, fail)
+    assert not cache.finished("train", {"x": 1})  # half-written: not finished
+
+    def build(folder: Path) -> None:
+        calls.append((folder / "half.txt").exists())
+        (folder / "out.txt").write_text("done")
+
+    folder, cached = cache.run("train", {"x": 1}, build)
+    assert not cached and (folder / MARKER).is_file()
+    again, cached = cache.run("train", {"x": 1}, build)
+    assert cached and again == folder
+    assert calls == [True]  # built once, in the interrupted stage's folder
+    other, cached = cache.run("train", {"x": 2}, build)
+    assert not cached and other != folder and calls == [True, False]
+    assert json.loads((folder / MARKER).read_text())["config"] == {"x": 1}
+
+
+# --- whole runs --------------------------------------------------------------------------
+
+
+def _check_outputs(out: Path, backend: str) -> dict:
+    results = json.loads((out / "results.json").read_text())
+    assert list(results) == list(ROW_IDS)
+    for entry in results.values():
+        assert SCHEMA <= set(entry)
+        assert entry["episodes"] == 2 and entry["seeds"] == 1
+        assert all(np.isfinite(entry[k]) for k in SCHEMA if k.endswith(("_mean", "_std")))
+    assert json.loads((out / f"results.{backend}.json").read_text()) == results
+    run = json.loads((out / "run.json").read_text())
+    assert set(run["claims"]) == {c.name for c in CLAIMS}
+    assert all(c["verdict"] in (HELD, NOT_HELD) for c in run["claims"].values())
+    study = json.loads((out / "inference.json").read_text())
+    assert {"inference", "random", "nominal", "oracle", "inference_contact"} == set(
+        study["methods"]
+    )
+    markdown = (out / "results.md").read_text()
+    assert all(f"| {row_id} |" in markdown for row_id in ROW_IDS)
+    assert "## The paper's claims in this run" in markdown
+    for name in ("table", "learning_curves", "trajectories", "tolerance_images"):
+        assert (out / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for row_id in ROW_IDS:
+        check_rrd(out / "recordings" / f"{row_id}.rrd")
+    return results
+
+
+@pytest.mark.slow
+def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
+    kinematic = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
+    first = _check_outputs(tmp_path, "kinematic")
+    assert kinematic.cached == []
+    assert "Backends side by side" not in (tmp_path / "results.md").read_text()
+
+    again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
+    assert len(again.cached) == 16  # 15 evaluations + the study: nothing ran again
+    assert json.loads((tmp_path / "results.json").read_text()) == first
+
+    run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert list(results) == list(ROW_IDS)
+    markdown = (tmp_path / "results.md").read_text()
+    assert "## Backends side by side (mujoco vs kinematic)" in markdown
+    assert "## Inference study" not in markdown

@@ -6,9 +6,9 @@ Usage::
         safe pi_bc=runs/bc/policy.pt pi_n=runs/pi_n/policy.pt
 
 Each policy is an expert name (``safe``, ``efficient``) or ``NAME=PATH`` of a policy saved
-by ``tolins train``. Every policy sees the same seeds (10000, 10001, ...), which no
-training run uses; policies run on 2 threads (results do not depend on it). A
-tolerance-guided policy gets the embedding of the environment's socket.
+by ``tolins train``. Every policy sees the same seeds (10000, 10001, ...; those of
+``tolins bench``), which no training run uses; policies run on 2 threads (results do not
+depend on it). A tolerance-guided policy gets the embedding of the environment's socket.
 """
 
 from __future__ import annotations
@@ -17,20 +17,15 @@ import argparse
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-import gymnasium as gym
 import torch
 
-from tolins.learning.actors import make_actor
-from tolins.rollout import Summary, run_episode, summarise
-
-FIRST_SEED = 10_000
+from tolins.bench.evaluation import FIRST_SEED, eval_seeds, evaluate
+from tolins.rollout import Summary, summarise
 
 
-def evaluate(entry: str, env_id: str, episodes: int, backend: str) -> Summary:
+def figures(entry: str, env_id: str, episodes: int, backend: str) -> Summary:
     """Table 1's figures of ``entry`` over ``episodes`` episodes from the fixed seeds."""
-    env = gym.make(env_id, backend=backend).unwrapped
-    policy = make_actor(entry, env.nominal_socket)
-    return summarise([run_episode(env, policy, seed=FIRST_SEED + i) for i in range(episodes)])
+    return summarise(evaluate(entry, env_id, backend, eval_seeds(0, episodes)))
 
 
 def main() -> None:
@@ -44,7 +39,7 @@ def main() -> None:
     start = time.perf_counter()
     with ThreadPoolExecutor(2) as pool:
         summaries = pool.map(
-            lambda e: evaluate(e, args.env, args.episodes, args.backend), args.policies
+            lambda e: figures(e, args.env, args.episodes, args.backend), args.policies
         )
         print("| policy | eval env | reward | success rate | steps | collisions |")
         print("|---|---|---|---|---|---|")

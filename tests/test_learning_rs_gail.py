@@ -105,6 +105,20 @@ def test_resume_continues_to_the_identical_result(demos, bc_policy, tmp_path):
     np.testing.assert_array_equal(whole.means[-1], whole.policy.get_flat())
 
 
+def test_keep_best_returns_the_mean_with_the_best_evaluation_reward(demos, bc_policy, tmp_path):
+    # a large step: the means wander, so the best is rarely the last
+    config = RSGailConfig(iterations=5, keep_best=True, **{**TINY, "sigma0": 0.5})
+    result = _train(bc_policy.with_flat(bc_policy.get_flat()), demos, tmp_path / "best", config)
+    last = RSGailConfig(iterations=5, **{**TINY, "sigma0": 0.5})
+    plain = _train(bc_policy.with_flat(bc_policy.get_flat()), demos, tmp_path / "last", last)
+    np.testing.assert_array_equal(result.means, plain.means)  # the same search
+    assert plain.selected == 5
+    rewards = [row["reward"] for row in plain.history] + [plain.final["reward"]]
+    assert result.selected == int(np.argmax(rewards))
+    np.testing.assert_array_equal(result.policy.get_flat(), result.means[result.selected])
+    assert result.final["reward"] == max(rewards)
+
+
 def test_stop_rule_ends_a_stalled_run(demos, bc_policy, tmp_path):
     config = RSGailConfig(
         iterations=30,

@@ -30,18 +30,44 @@ def evaluate_row(
     record: Path | None = None,
     recorded: int = 0,
 ) -> list[Episode]:
-    """Run ``row``'s policy on its eval env from each seed; the first ``recorded`` episodes
-    go through :class:`tolins.record.RerunRecorder` into ``record`` (an ``.rrd``).
-
-    ``policy_path`` is the trained policy (``None`` for an expert row). A π_φ* row wraps
-    the policy in :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary
-    outcomes (the paper's inference), reset before every episode.
-    """
-    env = gym.make(row.eval_env, backend=backend)
+    """:func:`evaluate` ``row``'s policy (``policy_path``: the trained one, ``None`` for an
+    expert row) on its eval env; a π_φ* row with inference in the loop."""
     entry = row.agent if policy_path is None else f"{row.agent}={policy_path}"
+    return evaluate(
+        entry,
+        row.eval_env,
+        backend,
+        seeds,
+        inference=row.inference,
+        record=record,
+        recorded=recorded,
+        policy_name=f"{row.id} {row.policy}",
+    )
+
+
+def evaluate(
+    entry: str,
+    env_id: str,
+    backend: str,
+    seeds: list[int],
+    *,
+    inference: bool = False,
+    record: Path | None = None,
+    recorded: int = 0,
+    policy_name: str | None = None,
+) -> list[Episode]:
+    """Run the policy ``entry`` (:func:`tolins.learning.actors.make_actor`) on ``env_id``
+    from each seed; the first ``recorded`` episodes go through
+    :class:`tolins.record.RerunRecorder` into ``record`` (an ``.rrd``).
+
+    ``inference=True`` wraps the policy in
+    :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary outcomes (the
+    paper's π_φ*), reset before every episode.
+    """
+    env = gym.make(env_id, backend=backend)
     actor = make_actor(entry, env.unwrapped.nominal_socket)
     wrapper = None
-    if row.inference:
+    if inference:
         from tolins.inference.adaptive import InferenceGuidedPolicy
 
         wrapper = actor = InferenceGuidedPolicy(actor, env, contact=False)
@@ -49,7 +75,7 @@ def evaluate_row(
     if record is not None and recorded > 0:
         from tolins.record import RerunRecorder
 
-        recorder = RerunRecorder(env, record, policy_name=f"{row.id} {row.policy}")
+        recorder = RerunRecorder(env, record, policy_name=policy_name or entry.split("=")[0])
     episodes = []
     try:
         for i, seed in enumerate(seeds):

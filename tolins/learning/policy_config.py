@@ -93,6 +93,9 @@ class RSGailConfig:
     """Stop early by the paper's rule: reward stopped rising and D(student) in 40-60 percent."""
     patience: int = 10
     """Iterations without a new best evaluation reward before the stop rule may fire."""
+    keep_best: bool = False
+    """Return the CMA-ES mean with the best evaluation reward (on the fixed evaluation
+    seeds of the learning curves) instead of the last one."""
 
     def __post_init__(self) -> None:
         _check_at_least(self, ("iterations", "discriminator_every", "eval_episodes"), 1)

@@ -76,7 +76,9 @@ class RSGailResult:
     """Reward, success, collisions and D(student) of the returned policy on the eval seeds."""
     means: np.ndarray
     """``(iterations + 1, size)``: the CMA-ES mean evaluated in each history row, then the
-    returned policy's parameters (the trajectories over training, the paper's Fig. 4a)."""
+    last mean (the trajectories over training, the paper's Fig. 4a)."""
+    selected: int
+    """Index into ``means`` of the returned policy: the last, or the best with ``keep_best``."""
 
 
 def episode_seed(*key: int) -> int:
@@ -207,11 +209,19 @@ def train_rs_gail(
                 stopped = "stop rule"
                 break
     bar.close()
-    policy.set_flat(es.mean)
+    snapshots = np.array([*means[: len(history)], es.mean])
+    policy.set_flat(snapshots[-1])
     with single_threaded_torch():
         final = _summary(runner.run(policy, eval_seeds), discriminator)
-    snapshots = np.array([*means[: len(history)], policy.get_flat()])
-    return RSGailResult(policy, history, stopped, final, snapshots)
+    selected = len(history)
+    if config.keep_best:
+        rewards = [row["reward"] for row in history] + [final["reward"]]
+        selected = int(np.argmax(rewards))  # the first of equals: the earliest
+        if selected < len(history):
+            policy.set_flat(snapshots[selected])
+            with single_threaded_torch():
+                final = _summary(runner.run(policy, eval_seeds), discriminator)
+    return RSGailResult(policy, history, stopped, final, snapshots, selected)
 
 
 def _summary(current: list[Rollout], discriminator: Discriminator) -> dict[str, float]:

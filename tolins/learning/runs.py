@@ -132,5 +132,10 @@ def _finish(out: Path, result: RSGailResult, metadata: dict[str, Any], title: st
     atomic_write(out / MEANS, lambda file: np.save(file, result.means))
     if result.history:
         plot_curves(out / "curves.png", result.history, title)
-    summary = {"stopped": result.stopped, "iterations": len(result.history), "final": result.final}
+    summary = {
+        "stopped": result.stopped,
+        "iterations": len(result.history),
+        "selected": result.selected,
+        "final": result.final,
+    }
     atomic_json(out / "run.json", {**metadata, "result": summary})

@@ -34,18 +34,21 @@ def plot_table(
     results: dict[str, dict[str, Any]],
     paper: dict[str, dict[str, tuple[float, float]]],
 ) -> Path:
-    """Reward and success rate of every row, this run beside the paper."""
+    """Reward and success rate of every row, this run (± standard error of the mean)
+    beside the paper (± its std over runs)."""
+    from tolins.bench.results import standard_error
+
     plt = _pyplot()
     rows = list(results)
     x = np.arange(len(rows))
     figure, axes = plt.subplots(2, 1, figsize=(max(6, 0.7 * len(rows) + 2), 6), sharex=True)
     for axis, figure_name in zip(axes, ("reward", "success"), strict=True):
         ours = [results[r][f"{figure_name}_mean"] for r in rows]
-        ours_std = [results[r][f"{figure_name}_std"] for r in rows]
+        ours_error = [standard_error(results[r], figure_name) for r in rows]
         theirs = [paper[r][figure_name][0] for r in rows]
         theirs_std = [paper[r][figure_name][1] for r in rows]
-        axis.bar(x - 0.2, ours, 0.4, yerr=ours_std, label="tolins", capsize=2)
-        axis.bar(x + 0.2, theirs, 0.4, yerr=theirs_std, label="paper", capsize=2, alpha=0.7)
+        axis.bar(x - 0.2, ours, 0.4, yerr=ours_error, label="tolins (± s.e.)", capsize=2)
+        axis.bar(x + 0.2, theirs, 0.4, yerr=theirs_std, label="paper (± std)", capsize=2, alpha=0.7)
         axis.set_ylabel("success rate" if figure_name == "success" else "reward")
         axis.grid(axis="y", alpha=0.3)
     axes[0].legend()

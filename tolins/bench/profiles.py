@@ -68,7 +68,7 @@ PROFILES: dict[str, Profile] = {
     # The paper's budgets: 100 RS-GAIL iterations, 100 evaluation episodes, 500 workpieces.
     "paper": Profile("paper", 50, 200, 100, 100, 16, 4, 8, 100, 3, 500, 3),
     # ≤ 15 min on 2 cores: RS-GAIL's reward rises most in its first 20-30 iterations.
-    "quick": Profile("quick", 50, 200, 30, 15, 16, 4, 8, 30, 1, 200, 2),
+    "quick": Profile("quick", 50, 200, 30, 20, 16, 4, 8, 100, 1, 500, 2),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
     "tiny": Profile("tiny", 4, 5, 1, 1, 4, 1, 2, 2, 1, 6, 1),
 }

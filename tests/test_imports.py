@@ -90,17 +90,19 @@ def test_mjcf_does_not_import_envs_or_policies(module: str) -> None:
     assert "tolins.geometry" in loaded  # the probe does see tolins imports
 
 
-_ABOVE_LEARNING = ("tolins.inference", "tolins.record", "tolins.dmc", "tolins.cli")
-_EDGES = ("tolins.record", "tolins.dmc", "tolins.cli")
+_EDGES = ("tolins.record", "tolins.dmc", "tolins.cli", "tolins.bench")
+_ABOVE_LEARNING = ("tolins.inference", *_EDGES)
 _LATER_LAYERS = {
     # module: prefixes it must not load (layers above it, and the edges)
-    "tolins.envs": ("tolins.learning", "tolins.inference", "tolins.record", "tolins.dmc"),
+    "tolins.envs": ("tolins.learning", "tolins.inference", *_EDGES),
     "tolins.learning.rs_gail": _ABOVE_LEARNING,
     "tolins.learning.autoencoder": _ABOVE_LEARNING,
     "tolins.learning.embedding_train": _ABOVE_LEARNING,
     "tolins.learning.embedding_eval": _ABOVE_LEARNING,
     "tolins.inference.posterior": _EDGES,
     "tolins.inference.adaptive": _EDGES,
+    # the bench's cheap parts (the CLI parser) need neither torch nor the learning code
+    "tolins.bench.cli": ("tolins.learning.rs_gail", "tolins.learning.bc", "tolins.record"),
 }
 
 

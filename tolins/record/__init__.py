@@ -1,6 +1,7 @@
 """Record insertion episodes to rerun ``.rrd`` files and replay them.
 
-Sits at the edge of tolins: it reads envs and specs, nothing in tolins imports it.
+Sits at the edge of tolins: it reads envs and specs; only the top (the cli, the bench)
+imports it.
 """
 
 from tolins.record.recorder import RerunRecorder, RrdFile, record_episodes

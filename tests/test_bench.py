@@ -211,7 +211,7 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
-    assert len(again.cached) == 16  # 15 evaluations + the study: nothing ran again
+    assert len(again.cached) == 24  # 8 trainings, 15 evaluations, the study: none ran again
     assert json.loads((tmp_path / "results.json").read_text()) == first
 
     run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))

@@ -188,23 +188,22 @@ def format_claims(claims: list[ClaimCheck]) -> str:
 def format_backends(
     backend: str, results: dict[str, Any], other: str, other_results: dict[str, Any]
 ) -> str:
-    """Each row's figures on both backends and the change the contact physics makes."""
+    """Each row's means on the kinematic simulator → on MuJoCo, with the change the contact
+    physics makes in brackets."""
     physics, kinematic = (
         (results, other_results) if backend == "mujoco" else (other_results, results)
     )
     lines = [
-        "| ID | policy | eval env | reward mujoco | reward kinematic | success mujoco "
-        "| success kinematic | steps mujoco | steps kinematic | collisions mujoco "
-        "| collisions kinematic |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| ID | policy | eval env | reward | success rate | steps | collisions |",
+        "|---|---|---|---|---|---|---|",
     ]
     for row_id, entry in physics.items():
         if row_id not in kinematic:
             continue
         cells = [row_id, entry["policy"], _short(entry["eval_env"])]
         for name, digits in _FIGURES:
-            cells += [f"{physics[row_id][f'{name}_mean']:.{digits}f}"]
-            cells += [f"{kinematic[row_id][f'{name}_mean']:.{digits}f}"]
+            before, after = kinematic[row_id][f"{name}_mean"], entry[f"{name}_mean"]
+            cells.append(f"{before:.{digits}f} → {after:.{digits}f} ({after - before:+.{digits}f})")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -217,8 +216,10 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
     parts = [
         f"# tolins bench: Table 1 on the {config.backend} backend ({config.profile} profile)",
         "",
-        f"{datetime.date.today().isoformat()}, `{_command(config)}`, "
-        f"{run.wall_s / 60:.1f} min wall time ({len(run.cached)} cached stages). "
+        f"{datetime.date.today().isoformat()}, `{_command(config)}`: "
+        f"{run.wall_s / 60:.1f} min ({len(run.cached)} of {len(run.stage_wall_s)} stages "
+        f"cached; the stages took {sum(run.stage_wall_s.values()) / 60:.1f} min when they ran, "
+        f"evaluations {config.workers} at a time). "
         f"{seeds} training seed(s), {episodes} evaluation episodes per row and seed "
         f"(seeds {FIRST_SEED}…); ± is the std over "
         f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs).",
@@ -239,8 +240,9 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
             "",
             f"## Backends side by side ({config.backend} vs {other[0]})",
             "",
-            "Means of the same pipeline on MuJoCo contact physics and on the paper's "
-            f"kinematic simulator (`results.{other[0]}.json` from an earlier run in this "
+            "Means of the same pipeline (same profile, seeds and evaluation seeds) on the "
+            "paper's kinematic simulator → on MuJoCo contact physics, the change in "
+            f"brackets (`results.{other[0]}.json`: the other backend's last run in this "
             "folder).",
             "",
             format_backends(config.backend, run.results, *other),

@@ -56,6 +56,7 @@ def run_bench(
                 if (training.name, seed) not in policies:
                     policies[training.name, seed] = trainer.policy(training.name, seed)
     run.stage_wall_s.update(trainer.wall_s)
+    run.cached += trainer.cached
     for name, seed in policies:
         run.stage_folders[trainer.stage_name(name, seed)] = policies[name, seed].parent
 

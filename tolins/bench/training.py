@@ -28,6 +28,7 @@ class Trainer:
         self.cache, self.profile, self.backend = cache, profile, backend
         self.progress, self.log = progress, log
         self.wall_s: dict[str, float] = {}
+        self.cached: list[str] = []
         self._done: dict[tuple[str, int], Path] = {}
 
     def config(self, name: str, seed: int) -> dict[str, Any]:
@@ -69,6 +70,8 @@ class Trainer:
             stage, config, lambda out: self._train(training, seed, out, upstream)
         )
         self.wall_s[stage] = self.cache.wall_s(folder)
+        if cached:
+            self.cached.append(stage)
         self.log(f"{stage}: {'cached' if cached else 'trained'} ({self.wall_s[stage]:.0f} s)")
         self._done[name, seed] = folder / "policy.pt"
         return self._done[name, seed]

@@ -220,3 +220,25 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     markdown = (tmp_path / "results.md").read_text()
     assert "## Backends side by side (mujoco vs kinematic)" in markdown
     assert "## Inference study" not in markdown
+
+
+@pytest.mark.slow
+def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
+    whole = run_bench(
+        BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path / "whole"), study=False),
+        progress=False,
+        log=lambda _: None,
+    )
+
+    def interrupt(line: str) -> None:
+        if line.startswith("training pi_phi_circle"):
+            raise KeyboardInterrupt
+
+    config = BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path / "b"), study=False)
+    with pytest.raises(KeyboardInterrupt):
+        run_bench(config, progress=False, log=interrupt)
+    assert not (tmp_path / "b" / "results.json").exists()  # nothing reported half-way
+    resumed = run_bench(config, progress=False, log=lambda _: None)
+    assert {"bc_safe-seed0", "pi_n_safe-seed0", "pi_n_efficient-seed0"} <= set(resumed.cached)
+    assert "pi_phi_circle-seed0" not in resumed.cached
+    assert resumed.results == whole.results

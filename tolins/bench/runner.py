@@ -77,7 +77,7 @@ def run_bench(
         run.results[row.id] = row_entry(row, [per_job[row, seed] for seed in range(seeds)])
     run.claims = check_claims(run.results)
     if config.study:
-        run.study = _study_stage(cache, run, profile, config.backend, log)
+        run.study = _study_stage(cache, run, profile, config.backend, log, progress)
     run.wall_s = time.perf_counter() - began
     write_reports(run, trainer, seeds)
     return run
@@ -122,7 +122,12 @@ def _evaluation_stage(
 
 
 def _study_stage(
-    cache: StageCache, run: BenchRun, profile: Profile, backend: str, log: Callable[[str], None]
+    cache: StageCache,
+    run: BenchRun,
+    profile: Profile,
+    backend: str,
+    log: Callable[[str], None],
+    progress: bool,
 ) -> dict[str, Any]:
     """The inference study (MuJoCo outcomes on the mujoco backend, the tolerance model on
     the kinematic one); its JSON in the issue's schema."""
@@ -139,7 +144,8 @@ def _study_stage(
     def build(folder: Path) -> None:
         source = "MuJoCo contacts" if study.physics else "the tolerance model"
         log(f"inference study: {study.samples} workpieces, outcomes from {source}")
-        result = run_study(study)
+        with tqdm(total=study.samples, desc="inference study", disable=not progress) as bar:
+            result = run_study(study, on_workpiece=lambda _: bar.update())
         save_plot(result, folder / "inference_study.png")
         write_json(result, folder / "inference.json")
 

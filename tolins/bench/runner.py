@@ -33,6 +33,7 @@ from tolins.bench.results import row_entry
 from tolins.bench.stages import StageCache
 from tolins.bench.table import Row, select_rows
 from tolins.bench.training import Trainer
+from tolins.rollout import Episode
 
 
 def run_bench(
@@ -63,7 +64,7 @@ def run_bench(
     jobs = [(row, seed) for row in rows for seed in range(seeds)]
     bar = tqdm(total=len(jobs), desc="evaluate", unit="row×seed", disable=not progress)
 
-    def evaluate(job: tuple[Row, int]) -> list:
+    def evaluate(job: tuple[Row, int]) -> list[Episode]:
         row, seed = job
         policy = policies.get((row.agent, seed))
         episodes = _evaluation_stage(cache, run, row, seed, policy, profile, config.backend)
@@ -91,7 +92,7 @@ def _evaluation_stage(
     policy: Path | None,
     profile: Profile,
     backend: str,
-) -> list:
+) -> list[Episode]:
     import tolins
 
     recorded = profile.recorded_episodes if seed == 0 else 0

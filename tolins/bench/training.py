@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,13 @@ class Trainer:
     """
 
     def __init__(
-        self, cache: StageCache, profile: Profile, backend: str, *, progress=True, log=print
+        self,
+        cache: StageCache,
+        profile: Profile,
+        backend: str,
+        *,
+        progress: bool = True,
+        log: Callable[[str], None] = print,
     ) -> None:
         self.cache, self.profile, self.backend = cache, profile, backend
         self.progress, self.log = progress, log
@@ -54,6 +61,7 @@ class Trainer:
         return config
 
     def stage_name(self, name: str, seed: int) -> str:
+        """The stage name of training ``name`` with ``seed``, e.g. ``pi_n_safe-seed0``."""
         return f"{name}-seed{seed}"
 
     def policy(self, name: str, seed: int) -> Path:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from tolins.atomic import atomic_write
+from tolins.bench.results import standard_error
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import NO_TOLERANCE, WINDOWS, image
 
@@ -36,7 +37,6 @@ def plot_table(
 ) -> Path:
     """Reward and success rate of every row, this run (± standard error of the mean)
     beside the paper (± its std over runs)."""
-    from tolins.bench.results import standard_error
 
     plt = _pyplot()
     rows = list(results)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from collections.abc import Callable
@@ -27,3 +28,9 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Any], None], mode: st
         Path(temp).unlink(missing_ok=True)
         raise
     return path
+
+
+def atomic_json(path: str | os.PathLike, data: Any, *, sort_keys: bool = False) -> Path:
+    """``data`` as indented JSON (and a final newline) at ``path``, atomically."""
+    text = json.dumps(data, indent=2, sort_keys=sort_keys) + "\n"
+    return atomic_write(path, lambda file: file.write(text), mode="w")

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from tolins.atomic import atomic_write
+from tolins.atomic import atomic_json, atomic_write
 from tolins.bench import plots
 from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
@@ -24,25 +24,20 @@ from tolins.envs.tasks import TASKS
 _FIGURES = (("reward", 2), ("success", 2), ("steps", 2), ("collisions", 2))
 
 
-def write_json(path: Path, data: Any) -> Path:
-    text = json.dumps(data, indent=2)
-    return atomic_write(path, lambda file: file.write(text + "\n"), mode="w")
-
-
 def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
     """Write every output of ``run`` into ``run.config.out``; the paths written."""
     out = Path(run.config.out)
     backend = run.config.backend
     written = [
-        write_json(out / "results.json", run.results),
-        write_json(out / f"results.{backend}.json", run.results),
+        atomic_json(out / "results.json", run.results),
+        atomic_json(out / f"results.{backend}.json", run.results),
     ]
     if run.study is not None:
-        written.append(write_json(out / "inference.json", run.study))
+        written.append(atomic_json(out / "inference.json", run.study))
         written.append(_copy(run.stage_folders["inference-study"] / "inference_study.png", out))
     written += _recordings(run, out)
     written += _figures(run, trainer, out)
-    written.append(write_json(out / "run.json", _run_record(run, seeds)))
+    written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
     text = format_markdown(run, _other_backend(out, backend))
     written.append(atomic_write(out / "results.md", lambda file: file.write(text), mode="w"))
     return written

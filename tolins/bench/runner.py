@@ -18,7 +18,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from tolins.atomic import atomic_write
+from tolins.atomic import atomic_json
 from tolins.bench.claims import check_claims
 from tolins.bench.config import EPISODES, RECORDING, BenchConfig, BenchRun
 from tolins.bench.evaluation import (
@@ -110,8 +110,7 @@ def _evaluation_stage(
         episodes = evaluate_row(
             row, policy, backend, config["seeds"], record=record, recorded=recorded
         )
-        text = json.dumps(episodes_to_json(episodes), indent=1)
-        atomic_write(folder / EPISODES, lambda file: file.write(text), mode="w")
+        atomic_json(folder / EPISODES, episodes_to_json(episodes))
 
     name = f"eval-{row.id}-seed{seed}"
     folder, cached = cache.run(name, config, build)

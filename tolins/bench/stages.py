@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from tolins.atomic import atomic_write
+from tolins.atomic import atomic_json
 
 MARKER = "stage.json"
 
@@ -51,8 +51,7 @@ class StageCache:
         began = time.perf_counter()
         build(folder)
         record = {"name": name, "config": dict(config), "wall_s": time.perf_counter() - began}
-        text = json.dumps(record, indent=2, sort_keys=True)
-        atomic_write(folder / MARKER, lambda file: file.write(text), mode="w")
+        atomic_json(folder / MARKER, record, sort_keys=True)
         return folder, False
 
     def wall_s(self, folder: Path) -> float:

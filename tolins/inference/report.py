@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from tolins.atomic import atomic_write
+from tolins.atomic import atomic_json, atomic_write
 from tolins.inference.study import PAPER, StudyResult
 
 
@@ -32,8 +31,7 @@ def format_table(result: StudyResult) -> str:
 
 def write_json(result: StudyResult, path: str | Path) -> Path:
     """Write :meth:`StudyResult.to_json` atomically (temporary file, then rename)."""
-    text = json.dumps(result.to_json(), indent=2) + "\n"
-    return atomic_write(path, lambda file: file.write(text), mode="w")
+    return atomic_json(path, result.to_json())
 
 
 def save_plot(result: StudyResult, path: str | Path) -> Path:

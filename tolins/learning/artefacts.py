@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 from collections.abc import Iterator
 from dataclasses import asdict
@@ -18,11 +17,6 @@ from tolins.atomic import atomic_write
 def atomic_torch_save(path: str | os.PathLike, payload: dict[str, Any]) -> Path:
     """``torch.save(payload)`` to ``path`` atomically."""
     return atomic_write(path, lambda file: torch.save(payload, file))
-
-
-def atomic_json(path: str | os.PathLike, data: Any) -> Path:
-    """``data`` as indented JSON at ``path``, atomically."""
-    return atomic_write(path, lambda file: json.dump(data, file, indent=2), mode="w")
 
 
 def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from tolins.atomic import atomic_write
-from tolins.learning.artefacts import atomic_json, run_metadata
+from tolins.atomic import atomic_json, atomic_write
+from tolins.learning.artefacts import run_metadata
 from tolins.learning.bc import BCResult, behaviour_clone
 from tolins.learning.curves import plot_curves, write_curves_csv
 from tolins.learning.demonstrations import Rollout, collect

@@ -220,6 +220,7 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     markdown = (tmp_path / "results.md").read_text()
     assert "## Backends side by side (mujoco vs kinematic)" in markdown
     assert "## Inference study" not in markdown
+    assert not (tmp_path / "inference.json").exists()  # not the kinematic run's study
 
 
 @pytest.mark.slow

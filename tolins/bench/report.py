@@ -35,6 +35,9 @@ def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
     if run.study is not None:
         written.append(atomic_json(out / "inference.json", run.study))
         written.append(_copy(run.stage_folders["inference-study"] / "inference_study.png", out))
+    else:  # an earlier run's study would read as this run's (its stage stays cached)
+        (out / "inference.json").unlink(missing_ok=True)
+        (out / "inference_study.png").unlink(missing_ok=True)
     written += _recordings(run, out)
     written += _figures(run, trainer, out)
     written.append(atomic_json(out / "run.json", _run_record(run, seeds)))

@@ -231,7 +231,9 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         format_claims(run.claims),
     ]
     if run.study is not None:
-        parts += ["", "## Inference study", "", _format_study(run.study), ""]
+        from tolins.inference.report import format_markdown as format_study
+
+        parts += ["", "## Inference study", "", format_study(run.study), ""]
         parts += ["![inference study](inference_study.png)"]
     if other is not None:
         parts += [
@@ -257,26 +259,6 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "",
     ]
     return "\n".join(parts)
-
-
-def _format_study(study: dict[str, Any]) -> str:
-    from tolins.inference.study import PAPER as STUDY_PAPER
-
-    lines = [
-        f"Realised: {study['nominal_insertable']:.1%} insert at the nominal goal, "
-        f"{study['impossible']:.1%} nowhere.",
-        "",
-        "| method | inserted within 10 attempts | mean attempts | paper |",
-        "|---|---|---|---|",
-    ]
-    for method, figures in study["methods"].items():
-        paper = STUDY_PAPER.get(method)
-        reference = f"{paper[0]:.1%} at {paper[1]:.3f}" if paper else "—"
-        lines.append(
-            f"| {method} | {figures['success_within_10']:.1%} "
-            f"| {figures['mean_attempts']:.3f} | {reference} |"
-        )
-    return "\n".join(lines)
 
 
 def _short(env_id: str) -> str:

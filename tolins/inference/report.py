@@ -10,22 +10,42 @@ from tolins.atomic import atomic_json, atomic_write
 from tolins.inference.study import PAPER, StudyResult
 
 
+def _rows(summary: dict) -> list[tuple[str, float, float, float, str]]:
+    """Per method of ``summary`` (:meth:`StudyResult.to_json`): inserted within 10, the
+    same as a share of the insertable workpieces, mean attempts, the paper's figures."""
+    insertable = 1.0 - summary["impossible"]
+    rows = []
+    for method, figures in summary["methods"].items():
+        paper = PAPER.get(method)
+        cite = f"{paper[0]:.1%} at {paper[1]:.3f}" if paper else ""
+        within = figures["success_within_10"]
+        rows.append((method, within, within / insertable, figures["mean_attempts"], cite))
+    return rows
+
+
 def format_table(result: StudyResult) -> str:
     """Methods beside the paper's figures, success also as a share of insertable ones."""
-    insertable = 1.0 - result.impossible
     lines = [
         f"{result.config.samples} workpieces: {result.nominal_insertable:.1%} insert at the "
         f"nominal goal, {result.impossible:.1%} nowhere",
         f"{'method':<18} {'within 10':>9} {'of insertable':>13} {'mean attempts':>13}   paper",
     ]
-    for method in result.config.methods:
-        s = result.summary(method)
-        paper = PAPER.get(method)
-        cite = f"{paper[0]:.1%} at {paper[1]:.3f}" if paper else ""
-        lines.append(
-            f"{method:<18} {s['success_within_10']:>9.1%} "
-            f"{s['success_within_10'] / insertable:>13.1%} {s['mean_attempts']:>13.3f}   {cite}"
-        )
+    for method, within, share, attempts, cite in _rows(result.to_json()):
+        lines.append(f"{method:<18} {within:>9.1%} {share:>13.1%} {attempts:>13.3f}   {cite}")
+    return "\n".join(lines)
+
+
+def format_markdown(summary: dict) -> str:
+    """The study's JSON (:meth:`StudyResult.to_json`) as a Markdown table beside the paper."""
+    lines = [
+        f"Realised: {summary['nominal_insertable']:.1%} insert at the nominal goal, "
+        f"{summary['impossible']:.1%} nowhere.",
+        "",
+        "| method | inserted within 10 attempts | of the insertable | mean attempts | paper |",
+        "|---|---|---|---|---|",
+    ]
+    for method, within, share, attempts, cite in _rows(summary):
+        lines.append(f"| {method} | {within:.1%} | {share:.1%} | {attempts:.3f} | {cite or '—'} |")
     return "\n".join(lines)
 
 

@@ -1,6 +1,7 @@
 """Time one goal query (posterior + CMA-ES) for the study's 2*1 socket (issue 6, item 5).
 
-Histories of 1..9 failed attempts from the study's own method; each query is
+Histories of 1..9 failed attempts from the study's own methods (binary outcomes, blocked
+pins, blocked pins and touch bearings); each query is
 ``next_goal(SOCKET, history, SIGMA, rng, n_samples=...)``: sample the posterior, pick the
 best candidate, refine with CMA-ES. Prints the median and the 95th percentile.
 
@@ -15,23 +16,29 @@ import time
 
 import numpy as np
 
-from tolins.geometry.tolerance import pins_inside
 from tolins.inference import History, next_goal
-from tolins.inference.study import SIGMA, SOCKET, draw_workpieces
+from tolins.inference.study import EVIDENCE, SIGMA, SOCKET, draw_workpieces, geometry_outcome
 
 
-def histories(count: int, contact: bool, particles: int) -> list[History]:
+def histories(count: int, method: str, particles: int) -> list[History]:
     """Failed-attempt histories met in the study (workpieces the nominal goal misses)."""
+    with_blocked, with_bearings = EVIDENCE[method]
     out: list[History] = []
     rng = np.random.default_rng(0)
     for eps in draw_workpieces(400, seed=7):
+        attempt = geometry_outcome(eps)
         history = History.empty()
         for _ in range(9):
             goal = next_goal(SOCKET, history, SIGMA, rng, n_samples=particles).goal
-            inside = pins_inside(SOCKET, eps, goal)
+            inside, bearings = attempt(goal)
             if inside.all():
                 break
-            history = history.append(goal, False, ~inside if contact else None)
+            history = history.append(
+                goal,
+                False,
+                ~inside if with_blocked else None,
+                bearings if with_bearings else None,
+            )
             out.append(history)
             if len(out) == count:
                 return out
@@ -45,8 +52,8 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
     queries = 10 if args.quick else args.queries
-    for contact in (False, True):
-        cases = histories(queries, contact, args.particles)
+    for method in EVIDENCE:
+        cases = histories(queries, method, args.particles)
         times = []
         for k, history in enumerate(cases):
             rng = np.random.default_rng(k)
@@ -54,9 +61,8 @@ def main() -> None:
             next_goal(SOCKET, history, SIGMA, rng, n_samples=args.particles)
             times.append(time.perf_counter() - start)
         ms = 1e3 * np.array(times)
-        label = "inference_contact" if contact else "inference"
         print(
-            f"{label:<18} {len(ms)} queries, {args.particles} particles, history 1-9: "
+            f"{method:<18} {len(ms)} queries, {args.particles} particles, history 1-9: "
             f"median {np.median(ms):.1f} ms, p95 {np.percentile(ms, 95):.1f} ms, "
             f"max {ms.max():.1f} ms (target ≤ 50 ms)"
         )

@@ -31,6 +31,9 @@ def test_bent_workpiece_shifts_goal_after_first_blocked_attempt_then_inserts() -
     assert wrapper.replans == 1
     assert wrapper.history.inserted.tolist() == [False]
     assert wrapper.history.blocked.tolist() == [[True, False]]  # pin 0 on the board top
+    # Pin 0 rests on the rim beyond its hole in +x (bearing 0), pin 1 gives no bearing.
+    bearing, none = wrapper.history.bearings[0]
+    assert abs(bearing) < 0.2 and np.isnan(none)
     assert np.linalg.norm(wrapper.goals[0][:2]) > 0.05
     np.testing.assert_array_equal(env.goal, wrapper.goals[0])
     wrapper.reset(0)

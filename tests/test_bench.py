@@ -15,6 +15,7 @@ from tolins.bench.runner import run_bench
 from tolins.bench.stages import MARKER, StageCache, stage_key
 from tolins.bench.table import PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
 from tolins.cli import main
+from tolins.inference.study import METHODS
 from tolins.record import check_rrd
 from tolins.rollout import Episode
 
@@ -190,9 +191,7 @@ def _check_outputs(out: Path, backend: str) -> dict:
     assert set(run["claims"]) == {c.name for c in CLAIMS}
     assert all(c["verdict"] in (HELD, NOT_HELD) for c in run["claims"].values())
     study = json.loads((out / "inference.json").read_text())
-    assert {"inference", "random", "nominal", "oracle", "inference_contact"} == set(
-        study["methods"]
-    )
+    assert set(METHODS) == set(study["methods"])
     markdown = (out / "results.md").read_text()
     assert all(f"| {row_id} |" in markdown for row_id in ROW_IDS)
     assert "## The paper's claims in this run" in markdown

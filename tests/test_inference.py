@@ -9,7 +9,7 @@ import pytest
 
 from tolins.cli import main
 from tolins.geometry.specs import CircularSocket
-from tolins.geometry.tolerance import contains, pins_inside
+from tolins.geometry.tolerance import contains, pin_gaps, pins_inside
 from tolins.inference import History, expected_success, find_goal, next_goal, sample_posterior
 from tolins.inference.study import SIGMA, SOCKET, StudyConfig, run_study
 
@@ -28,6 +28,47 @@ def test_pins_inside_matches_contains() -> None:
     for n in range(len(eps)):
         bent = CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps[n])
         assert np.array_equal(batch[n], contains(bent, poses))
+
+
+def test_pin_gaps_agree_with_pins_inside() -> None:
+    rng = _rng(11)
+    eps = rng.normal(0, 0.12, size=(20, 2, 2))
+    poses = rng.normal(0, [0.2, 0.2, 0.05], size=(15, 3))
+    gaps = pin_gaps(SPEC, eps[:, None], poses[None])
+    assert gaps.shape == (20, 15, 2, 2)
+    inside = np.linalg.norm(gaps, axis=-1) <= SPEC.clearance
+    assert np.array_equal(inside, pins_inside(SPEC, eps[:, None], poses[None]))
+    # At the nominal goal a pin's gap is its offset.
+    assert np.allclose(pin_gaps(SPEC, eps, np.zeros(3)), eps)
+
+
+def _contact_attempt(history: History, true: np.ndarray, goal: object) -> History:
+    """``history`` plus an attempt at ``goal`` on workpiece ``true`` with exact contacts."""
+    goal = np.asarray(goal, dtype=float)
+    gaps = pin_gaps(SPEC, true, goal)
+    inside = np.linalg.norm(gaps, axis=-1) <= SPEC.clearance
+    bearings = np.where(inside, np.nan, np.arctan2(gaps[:, 1], gaps[:, 0]))
+    return history.append(goal, bool(inside.all()), ~inside, bearings)
+
+
+def test_bearings_locate_the_blocked_pin_after_one_failure() -> None:
+    """Pin 0 bent 0.3 mm towards -y-x: one failed nominal attempt with its touch bearing
+    points the posterior at the bend's direction, and the next goal inserts."""
+    true = np.array([[-0.21, -0.21], [0.02, 0.0]])
+    with_bearing = _contact_attempt(History.empty(), true, np.zeros(3))
+    assert with_bearing.blocked.tolist() == [[True, False]]
+    blocked_only = History(with_bearing.poses, with_bearing.inserted, with_bearing.blocked)
+    posts = [sample_posterior(SPEC, h, SIGMA, 2000, _rng(9)) for h in (with_bearing, blocked_only)]
+
+    def spread(p: object) -> float:
+        """Weighted RMS of pin 0's offset angle around the bend's direction."""
+        angle = np.arctan2(p.offsets[:, 0, 1], p.offsets[:, 0, 0])
+        return float(np.sqrt(p.weights @ (angle - np.arctan2(-1, -1)) ** 2))
+
+    assert spread(posts[0]) < 0.25 < spread(posts[1])
+    result = find_goal(SPEC, posts[0], _rng(10))
+    assert result.expected_success > 0.8
+    assert pins_inside(SPEC, true, result.goal).all()
 
 
 def test_posterior_concentrates_with_contact_evidence() -> None:
@@ -118,6 +159,23 @@ def test_bad_histories_raise() -> None:
         History(np.zeros((1, 3)), np.array([1]))
     with pytest.raises(ValueError, match="blocked"):
         History(np.zeros((1, 3)), np.array([True]), np.array([[True, False]]))
+    failed, blocked = np.array([False]), np.array([[True, False]])
+    with pytest.raises(ValueError, match="without blocked"):
+        History(np.zeros((1, 3)), failed, None, None, np.array([[0.5, np.nan]]))
+    with pytest.raises(ValueError, match="shape"):
+        History(np.zeros((1, 3)), failed, blocked, None, np.array([0.5, np.nan]))
+    with pytest.raises(ValueError, match="not blocked"):
+        History(np.zeros((1, 3)), failed, blocked, None, np.array([[0.5, 0.1]]))
+    with pytest.raises(ValueError, match="inf"):
+        History(np.zeros((1, 3)), failed, blocked, None, np.array([[np.inf, np.nan]]))
+    unmeasured = History(np.zeros((1, 3)), failed, blocked, None, np.array([[np.nan, np.nan]]))
+    assert np.isnan(unmeasured.bearings).all()
+    with pytest.raises(ValueError, match="bearing_noise"):
+        History.empty(bearing_noise=0.0)
+    with pytest.raises(ValueError, match="every attempt or for none"):
+        History.empty().append([0, 0, 0], False, [True, False], [0.1, np.nan]).append(
+            [0, 0, 0], False, [True, False]
+        )
 
 
 def test_tiny_study_schema_ranking_and_worker_independence() -> None:
@@ -133,6 +191,17 @@ def test_tiny_study_schema_ranking_and_worker_independence() -> None:
     assert m["inference"]["success_within_10"] >= m["nominal"]["success_within_10"]
     two = run_study(StudyConfig(samples=12, seed=3, particles=300, workers=2))
     assert all(np.array_equal(result.attempts[k], two.attempts[k]) for k in config.methods)
+
+
+def test_contact_bearings_save_attempts() -> None:
+    """On the same workpieces, each level of evidence inserts in fewer attempts."""
+    methods = ("inference", "inference_blocked", "inference_contact")
+    result = run_study(StudyConfig(samples=40, seed=2, particles=300, workers=2, methods=methods))
+    attempts = {m: result.attempts[m] for m in methods}
+    both = (attempts["inference_contact"] > 0) & (attempts["inference_blocked"] > 0)
+    assert attempts["inference_contact"][both].sum() < attempts["inference_blocked"][both].sum()
+    assert result.summary("inference_contact")["mean_attempts"] < 1.7
+    assert result.summary("inference")["mean_attempts"] > 1.7
 
 
 def test_a_methods_result_does_not_depend_on_the_other_methods() -> None:
@@ -169,7 +238,14 @@ def test_physics_contact_evidence_matches_geometry() -> None:
     eps = np.array([[0.05, -0.1], [0.25, 0.1]])
     backend = make_backend(CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps))
     for goal in rng.normal(0, [0.12, 0.12, 0.03], size=(6, 3)):
-        inserted, blocked = physics_attempt(backend, goal)
-        inside = pins_inside(SPEC, eps, goal)
+        inserted, blocked, bearings = physics_attempt(backend, goal)
+        gaps = pin_gaps(SPEC, eps, goal)
+        inside = np.linalg.norm(gaps, axis=-1) <= SPEC.clearance
         assert inserted == inside.all()
         assert inserted or np.array_equal(blocked, ~inside)
+        assert np.array_equal(np.isfinite(bearings), blocked)
+        # Touch points sit on the 16-gon hole's rim: the bearing is the gap's direction
+        # within about half a facet (π/16).
+        expected = np.arctan2(gaps[:, 1], gaps[:, 0])
+        error = np.angle(np.exp(1j * (bearings - expected)))[blocked]
+        assert np.all(np.abs(error) < 0.2)

@@ -77,6 +77,7 @@ class ServoStepper:
         self._touch = data.sensordata[touch : touch + n_pins]
         self._wrench = data.sensordata[self._force : self._force + 3]
         self._warnings = data.warning.number
+        self._pin_geoms = {model.geom(f"pin{i}").id: i for i in range(n_pins)}
 
     def state(self, peak_force: float, error: str | None = None) -> BackendState:
         """The workpiece now: pose, wrench (N, N·mm, world axes) and the given peak force."""
@@ -99,6 +100,27 @@ class ServoStepper:
     def pin_forces(self) -> np.ndarray:
         """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
         return self._touch * _FORCE_SCALE
+
+    def pin_touch_points(self) -> np.ndarray:
+        """Where each pin presses on the board now: ``(n_pins, 2)`` world ``(x, y)`` (mm).
+
+        The normal-force-weighted mean of the pin's contact points; NaN for a pin without
+        contact force.
+        """
+        m, d = self.model, self.data
+        n_pins = len(self._pin_geoms)
+        weighted, total = np.zeros((n_pins, 2)), np.zeros(n_pins)
+        force = np.zeros(6)
+        for k in range(d.ncon):
+            contact = d.contact[k]
+            pin = self._pin_geoms.get(contact.geom1, self._pin_geoms.get(contact.geom2))
+            if pin is None:
+                continue
+            mujoco.mj_contactForce(m, d, k, force)
+            weighted[pin] += force[0] * contact.pos[:2]
+            total[pin] += force[0]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total[:, None] > 0, weighted / total[:, None], np.nan)
 
     def reset(self, pose: np.ndarray) -> BackendState:
         """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
@@ -168,6 +190,10 @@ class MujocoBackend:
     def pin_forces(self) -> np.ndarray:
         """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
         return self.stepper.pin_forces()
+
+    def pin_touch_points(self) -> np.ndarray:
+        """Where each pin presses on the board now (see :meth:`ServoStepper.pin_touch_points`)."""
+        return self.stepper.pin_touch_points()
 
     def reset(self, pose: np.ndarray) -> BackendState:
         return self.stepper.reset(pose)

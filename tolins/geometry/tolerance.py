@@ -208,18 +208,39 @@ def pins_inside(spec: CircularSocket, offsets: object, poses: object) -> np.ndar
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
     array = _checked_poses(poses)
+    eps = _checked_offsets(spec, offsets)
+    gaps = _pin_gaps(spec.hole_centers, eps, array)
+    return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
+
+
+def pin_gaps(spec: CircularSocket, offsets: object, poses: object) -> np.ndarray:
+    """Each pin's centre minus its hole's centre ``(..., n_pins, 2)`` (mm), as :func:`pins_inside`.
+
+    The gap of pin ``i`` is ``R(theta) (h_i + eps_i) + (x, y) - h_i``; the pin is in its hole
+    iff the gap's length is at most the clearance, and a blocked pin rests on the board on
+    the side the gap points to.
+    """
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
+    return _pin_gaps(spec.hole_centers, _checked_offsets(spec, offsets), _checked_poses(poses))
+
+
+def _pin_gaps(holes: np.ndarray, eps: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    pins = holes + eps
+    cos, sin = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
+    dx = cos * pins[..., 0] - sin * pins[..., 1] + poses[..., 0, None] - holes[:, 0]
+    dy = sin * pins[..., 0] + cos * pins[..., 1] + poses[..., 1, None] - holes[:, 1]
+    return np.stack([dx, dy], axis=-1)
+
+
+def _checked_offsets(spec: CircularSocket, offsets: object) -> np.ndarray:
     eps = np.asarray(offsets, dtype=float)
     if eps.ndim < 2 or eps.shape[-2:] != (spec.n_pins, 2) or not np.isfinite(eps).all():
         raise ValueError(
             f"offsets has shape {eps.shape} or non-finite values; allowed: finite "
             f"[..., {spec.n_pins}, 2] in mm"
         )
-    holes = spec.hole_centers
-    pins = holes + eps
-    cos, sin = np.cos(array[..., 2])[..., None], np.sin(array[..., 2])[..., None]
-    dx = cos * pins[..., 0] - sin * pins[..., 1] + array[..., 0, None] - holes[:, 0]
-    dy = sin * pins[..., 0] + cos * pins[..., 1] + array[..., 1, None] - holes[:, 1]
-    return dx * dx + dy * dy <= spec.clearance * spec.clearance
+    return eps
 
 
 @functools.lru_cache(maxsize=256)

@@ -13,9 +13,11 @@ watches for **blocked attempts**: a control step after which
 A blocked attempt is recorded in a :class:`~tolins.inference.History` at the *measured*
 truncated pose ``ŝ = obs[:3] + goal`` with the env's pose noise (the paper's ``g′``) and,
 with ``contact=True`` on the MuJoCo backend, which pins the board blocked (per-pin touch
-sensors ``MujocoBackend.pin_forces() > touch_force``). The posterior is updated, the next
-goal found with :func:`~tolins.inference.next_goal`, and ``env.unwrapped.goal`` set to it,
-so that the observation (and the wrapped policy) steers to the new goal.
+sensors ``MujocoBackend.pin_forces() > touch_force``) and where each touched it (the
+bearing of ``MujocoBackend.pin_touch_points()`` from its hole's centre). The posterior is
+updated, the next goal found with :func:`~tolins.inference.next_goal`, and
+``env.unwrapped.goal`` set to it, so that the observation (and the wrapped policy) steers
+to the new goal.
 
 One attempt per **contact**: on a blocked step the wrapper records the attempt, re-plans
 (at most ``max_replans`` per episode; a ``discard`` recommendation keeps the goal) and
@@ -51,7 +53,8 @@ class InferenceGuidedPolicy:
         spec: The nominal socket the inference starts from; default the env's
             ``nominal_socket``.
         sigma: Prior std of each pin's offset (mm); default the env's ``defect_sigma``.
-        contact: Use the per-pin touch sensors as evidence (MuJoCo backend only).
+        contact: Use the per-pin touch sensors and touch points as evidence (MuJoCo
+            backend only).
         surface_tol: ``|ẑ|`` (mm) up to which the pins count as on the board top.
         lift_steps: Control steps of full-speed lift (0.625 mm each) after every blocked
             attempt, before the wrapped policy takes over again.
@@ -131,13 +134,15 @@ class InferenceGuidedPolicy:
 
     def _replan(self, pose: np.ndarray) -> None:
         """Record a blocked attempt at the measured ``pose`` and move the goal."""
-        pins = None
+        pins = bearings = None
         if self.contact and isinstance(self.env.backend, MujocoBackend):
             forces = self.env.backend.pin_forces()
             pins = forces > self.touch_force
             if not pins.any():  # the board pushes back: at least the most loaded pin
                 pins[int(np.argmax(forces))] = True
-        self.history = self.history.append(pose, False, pins)
+            towards = self.env.backend.pin_touch_points() - self.spec.hole_centers
+            bearings = np.where(pins, np.arctan2(towards[:, 1], towards[:, 0]), np.nan)
+        self.history = self.history.append(pose, False, pins, bearings)
         result = next_goal(self.spec, self.history, self.sigma, self.rng, n_samples=self.n_samples)
         self.results.append(result)
         goal = self.env.goal if result.discard else self.base_goal + result.goal

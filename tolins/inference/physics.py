@@ -1,10 +1,12 @@
-"""Contact evidence from the physics: which pins the board blocked on an attempt.
+"""Contact evidence from the physics: which pins the board blocked on an attempt, and where.
 
 An attempt places the workpiece ``start_height`` mm over the board at the goal and pushes
 straight down. It inserted when the pin tips end ``success_depth`` below the surface;
 otherwise pin ``i`` was blocked when its touch sensor (``MujocoBackend.pin_forces()``)
-reads more than ``touch_force`` N. This is the evidence ``History.blocked`` of the
-``inference_contact`` likelihood, measured instead of computed from the geometry.
+reads more than ``touch_force`` N, and its bearing is the angle of its touch point
+(``MujocoBackend.pin_touch_points()``) seen from its hole's centre. These are the evidence
+``History.blocked`` and ``History.bearings`` of the contact likelihoods, measured instead
+of computed from the geometry.
 """
 
 from __future__ import annotations
@@ -24,8 +26,11 @@ def physics_attempt(
     success_depth: float = 1.0,
     steps: int = 4,
     touch_force: float = 0.05,
-) -> tuple[bool, np.ndarray]:
-    """``(inserted, blocked)`` of one downward push at ``goal`` ``[x, y, theta]``."""
+) -> tuple[bool, np.ndarray, np.ndarray]:
+    """``(inserted, blocked, bearings)`` of one downward push at ``goal`` ``[x, y, theta]``.
+
+    ``bearings`` ``(n_pins,)`` (rad) are NaN for the pins not blocked.
+    """
     x, y, theta = np.asarray(goal, dtype=float)
     backend.reset(np.array([x, y, theta, start_height]))
     push = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
@@ -34,8 +39,12 @@ def physics_attempt(
         if state.error:
             raise RuntimeError(f"physics attempt at {goal!r}: {state.error}")
         if state.pose[3] <= -success_depth:
-            return True, np.zeros(backend.spec.n_pins, dtype=bool)
-    return False, backend.pin_forces() > touch_force
+            free = np.zeros(backend.spec.n_pins, dtype=bool)
+            return True, free, np.full(backend.spec.n_pins, np.nan)
+    blocked = backend.pin_forces() > touch_force
+    towards = backend.pin_touch_points() - backend.spec.hole_centers
+    bearings = np.arctan2(towards[:, 1], towards[:, 0])
+    return False, blocked, np.where(blocked, bearings, np.nan)
 
 
 def make_backend(spec: CircularSocket) -> MujocoBackend:

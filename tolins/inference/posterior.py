@@ -27,11 +27,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket
-from tolins.geometry.tolerance import pins_inside
+from tolins.geometry.tolerance import pin_gaps
 from tolins.inference.history import History
 
 #: Noise draws per measured attempt (``K`` above).
 NOISE_DRAWS = 32
+#: Prior draws per returned sample: the importance step draws ``OVERSAMPLE × n_samples``,
+#: then resamples ``n_samples`` of them and moves them. The likelihood is cheap next to the
+#: goal search, which sees only ``n_samples``.
+OVERSAMPLE = 16
 _WIDENINGS = (2.0, 4.0)
 _MOVES = 4
 #: Tempering levels λ when no prior sample explains the history.
@@ -78,14 +82,32 @@ def log_likelihood(
     poses = history.poses[:, None, :]
     if noise_draws is not None:
         poses = poses + noise_draws
-    # inside: (N, m, K, n_pins)
-    inside = pins_inside(spec, offsets[:, None, None], poses[None])
+    # gaps: (N, m, K, n_pins, 2); inside: (N, m, K, n_pins)
+    gaps = pin_gaps(spec, offsets[:, None, None], poses[None])
+    inside = np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
     if history.blocked is None:
         fits = inside.all(-1) == history.inserted[None, :, None]
     else:
         fits = np.all(inside == ~history.blocked[None, :, None, :], axis=-1)
+    factor = fits.astype(float)
+    if history.bearings is not None:
+        factor *= np.exp(_log_bearing_factor(gaps, history))
     with np.errstate(divide="ignore"):
-        return np.maximum(np.log(fits.mean(-1)), -temper).sum(-1)
+        return np.maximum(np.log(factor.mean(-1)), -temper).sum(-1)
+
+
+def _log_bearing_factor(gaps: np.ndarray, history: History) -> np.ndarray:
+    """``Σ_i κ (cos(φ_ji − ∠gap_ji) − 1)`` over the measured bearings, ``κ = 1 / noise²``.
+
+    A von Mises density in the measured bearing ``φ_ji`` around the gap's direction,
+    normalised to 1 at its peak.
+    """
+    predicted = np.arctan2(gaps[..., 1], gaps[..., 0])
+    measured = history.bearings[None, :, None, :]
+    known = np.isfinite(measured)
+    kappa = 1.0 / history.bearing_noise**2
+    log_f = kappa * (np.cos(np.where(known, measured, 0.0) - predicted) - 1.0)
+    return np.where(known, log_f, 0.0).sum(-1)
 
 
 def sample_posterior(
@@ -102,16 +124,16 @@ def sample_posterior(
         raise ValueError(f"sigma={sigma!r}, n_samples={n_samples!r}; allowed: > 0 and ≥ 2")
     draws = _noise_draws(history, rng)
     shape = (n_samples, spec.n_pins, 2)
-    offsets = rng.normal(0.0, sigma, size=shape)
+    if len(history) == 0:
+        return Posterior(rng.normal(0.0, sigma, size=shape), np.full(n_samples, 1 / n_samples))
+    offsets = rng.normal(0.0, sigma, size=(n_samples * OVERSAMPLE, *shape[1:]))
     log_w = log_likelihood(spec, offsets, history, draws)
     if not np.isfinite(log_w).any():
-        offsets = _tempered(spec, history, sigma, offsets, draws, rng)
+        offsets = _tempered(spec, history, sigma, offsets[:n_samples], draws, rng)
         log_w = log_likelihood(spec, offsets, history, draws)
     if np.isfinite(log_w).any():
-        posterior = _normalised(offsets, log_w, 1.0)
-        if posterior.ess < n_samples / 4:
-            posterior = _resample_move(spec, history, sigma, posterior, draws, rng)
-        return posterior
+        weighted = _normalised(offsets, log_w, 1.0)
+        return _resample_move(spec, history, sigma, weighted, draws, rng, n_out=n_samples)
     for widening in _WIDENINGS:
         offsets = rng.normal(0.0, sigma * widening, size=shape)
         log_w = log_likelihood(spec, offsets, history, draws)
@@ -146,11 +168,14 @@ def _resample_move(
     draws: np.ndarray | None,
     rng: np.random.Generator,
     temper: float = np.inf,
+    n_out: int | None = None,
 ) -> Posterior:
-    """Systematic resampling, then Metropolis random-walk moves on prior × likelihood."""
-    n = len(posterior.weights)
+    """Systematic resampling to ``n_out`` samples (default: as many as given), then
+    Metropolis random-walk moves on prior × likelihood."""
+    n = len(posterior.weights) if n_out is None else n_out
     positions = (rng.random() + np.arange(n)) / n
-    index = np.minimum(np.searchsorted(np.cumsum(posterior.weights), positions), n - 1)
+    cumulative = np.cumsum(posterior.weights)
+    index = np.minimum(np.searchsorted(cumulative, positions), len(cumulative) - 1)
     offsets = posterior.offsets[index]
     log_p = _log_target(spec, history, sigma, offsets, draws, temper)
     step = 0.5 * np.maximum(offsets.std(axis=0), 1e-3 * sigma)

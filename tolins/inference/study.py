@@ -5,8 +5,11 @@ pin offset by ``N(0, SIGMA² I)``. Control and measurement are perfect: attempt 
 ``s̄_j`` inserts iff ``s̄_j ∈ T(ε)``. Each method gets up to ``max_attempts`` attempts:
 
 * ``inference``: the nominal goal, then CMA-ES on ``g_{m+1}`` (:func:`.goal.next_goal`).
-* ``inference_contact``: the same with the failed attempts' blocked pins (a pin is blocked
+* ``inference_blocked``: the same with the failed attempts' blocked pins (a pin is blocked
   iff it is outside its hole at the goal) in the likelihood.
+* ``inference_contact``: the blocked pins and where each touched the board: the bearing of
+  its touch point from its hole's centre (the direction of the pin's gap ``gap``, exact in
+  the tolerance model; MuJoCo's touch points with ``physics``).
 * ``random``: the nominal goal, then goals drawn without replacement from :data:`RANDOM_GOALS`.
 * ``nominal``: the nominal goal only.
 * ``oracle``: the centre goal of the true workpiece (:func:`.goal.centre_goals`).
@@ -22,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket
-from tolins.geometry.tolerance import pins_inside
+from tolins.geometry.tolerance import pin_gaps, pins_inside
 from tolins.inference.goal import centre_goals, next_goal
 from tolins.inference.history import History
 
@@ -32,7 +35,14 @@ SOCKET = CircularSocket(2, 1, pin_radius=0.3, hole_radius=0.5, row_pitch=5.0)
 #: (400,000 draws). No isotropic sigma gives the paper's 60 % and 0.8 % together
 #: (0.105 mm: 70 % and 0.7 %); the nominal fraction was matched.
 SIGMA = 0.115
-METHODS = ("inference", "inference_contact", "random", "nominal", "oracle")
+#: The methods; a method's random stream is keyed by its place here, so new ones go last.
+METHODS = ("inference", "inference_contact", "random", "nominal", "oracle", "inference_blocked")
+#: The evidence each inference method records: (blocked pins, touch bearings).
+EVIDENCE = {
+    "inference": (False, False),
+    "inference_blocked": (True, False),
+    "inference_contact": (True, True),
+}
 #: The random baseline's predefined goals: x, y in {-0.15, 0, 0.15} mm, theta in
 #: {-0.04, 0, 0.04} rad (0.1 mm at the pins), nominal first.
 RANDOM_GOALS = np.array(
@@ -56,8 +66,8 @@ class StudyConfig:
         particles: Posterior samples per goal query.
         workers: Processes (the result does not depend on it).
         methods: Methods to run, from :data:`METHODS`.
-        physics: Outcomes and blocked pins from MuJoCo contact physics
-            (:func:`.physics.physics_attempt`, touch sensors) instead of the tolerance model.
+        physics: Outcomes, blocked pins and touch bearings from MuJoCo contact physics
+            (:func:`.physics.physics_attempt`) instead of the tolerance model.
         discard_below: The inference methods give up on a workpiece (the paper's discard)
             when the best expected success ``g_{m+1}`` falls below this; 0: never.
     """
@@ -137,12 +147,14 @@ def run_study(
     return StudyResult(config, float(inside.mean()), float(1 - possible.mean()), attempts)
 
 
-Outcome = Callable[[np.ndarray], np.ndarray]
+#: An attempt at a goal: which pins are in their holes, and each blocked pin's bearing
+#: (rad, NaN for the pins inside).
+Outcome = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 def _workpiece(job: tuple[StudyConfig, int, np.ndarray]) -> dict[str, int]:
     config, index, eps = job
-    outcome = _physics_outcome(eps) if config.physics else _geometry_outcome(eps)
+    outcome = physics_outcome(eps) if config.physics else geometry_outcome(eps)
     # Each method's stream is keyed by its place in METHODS, not in config.methods, so a
     # method's result does not depend on which other methods run.
     return {
@@ -156,19 +168,30 @@ def _method_rng(seed: int, index: int, method: str) -> np.random.Generator:
     return np.random.default_rng([seed, index, METHODS.index(method) + 1])
 
 
-def _geometry_outcome(eps: np.ndarray) -> Outcome:
-    """Which pins are in their holes at a goal, by the tolerance model."""
-    return lambda goal: pins_inside(SOCKET, eps, goal)
+def geometry_outcome(eps: np.ndarray) -> Outcome:
+    """Which pins are in their holes at a goal, and the bearings, by the tolerance model."""
+
+    def attempt(goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        gaps = pin_gaps(SOCKET, eps, goal)
+        inside = np.sum(gaps * gaps, axis=-1) <= SOCKET.clearance**2
+        return inside, np.where(inside, np.nan, np.arctan2(gaps[:, 1], gaps[:, 0]))
+
+    return attempt
 
 
-def _physics_outcome(eps: np.ndarray) -> Outcome:
-    """Which pins are not blocked at a goal, by MuJoCo (all True when inserted)."""
+def physics_outcome(eps: np.ndarray) -> Outcome:
+    """Which pins are not blocked at a goal (all when inserted), and the bearings, by MuJoCo."""
     import dataclasses
 
     from tolins.inference.physics import make_backend, physics_attempt
 
     backend = make_backend(dataclasses.replace(SOCKET, pin_offsets=eps))
-    return lambda goal: ~physics_attempt(backend, goal)[1]
+
+    def attempt(goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        _, blocked, bearings = physics_attempt(backend, goal)
+        return ~blocked, bearings
+
+    return attempt
 
 
 def _attempts(
@@ -178,10 +201,10 @@ def _attempts(
     goals = _fixed_goals(method, eps, config.max_attempts, rng)
     if goals is not None:
         for attempt, goal in enumerate(goals, start=1):
-            if outcome(goal).all():
+            if outcome(goal)[0].all():
                 return attempt
         return 0
-    contact = method == "inference_contact"
+    with_blocked, with_bearings = EVIDENCE[method]
     history = History.empty()
     for attempt in range(1, config.max_attempts + 1):
         found = next_goal(
@@ -190,10 +213,15 @@ def _attempts(
         if found.discard:
             return 0
         goal = found.goal
-        inside = outcome(goal)
+        inside, bearings = outcome(goal)
         if inside.all():
             return attempt
-        history = history.append(goal, False, ~inside if contact else None)
+        history = history.append(
+            goal,
+            False,
+            ~inside if with_blocked else None,
+            bearings if with_bearings else None,
+        )
     return 0
 
 

@@ -7,9 +7,9 @@ Usage::
 
 Table 1's C4.1 / C4.2 figures (mean ± std): every policy bare, wrapped in
 :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary outcomes
-(``+inference``, the paper's π_φ*) and with the per-pin touch sensors
-(``+inference_contact``). Every variant sees the same seeds (10000, 10001, ...) and so
-the same bent workpieces and initial poses; a tolerance-guided policy gets the embedding
+(``+inference``, the paper's π_φ*) and with the per-pin touch sensors and touch bearings
+(``+inference_contact``). Every variant sees the same seeds (10000, 10001, ...) and so the
+same bent workpieces and initial poses; a tolerance-guided policy gets the embedding
 of the env's *nominal* socket. Variants run on 2 threads (results do not depend on it).
 """
 

@@ -11,7 +11,7 @@ from tolins.cli import main
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import contains, pin_gaps, pins_inside
 from tolins.inference import History, expected_success, find_goal, next_goal, sample_posterior
-from tolins.inference.study import SIGMA, SOCKET, StudyConfig, run_study
+from tolins.inference.study import METHODS, SIGMA, SOCKET, StudyConfig, run_study
 
 SPEC = SOCKET
 
@@ -229,6 +229,13 @@ def test_cli_smoke(tmp_path, capsys) -> None:
     assert "inference" in capsys.readouterr().out
     assert set(json.loads(out.read_text())["methods"]) >= {"inference", "random", "oracle"}
     assert plot.stat().st_size > 1000
+
+
+def test_cli_help_lists_every_method(capsys) -> None:
+    with pytest.raises(SystemExit):
+        main(["infer-study", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert all(method in help_text for method in METHODS)
 
 
 def test_physics_contact_evidence_matches_geometry() -> None:

@@ -224,7 +224,11 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
         "--particles", type=_positive_int, default=1000, help="posterior samples per query"
     )
     study.add_argument("--workers", type=_positive_int, default=2, help="processes")
-    study.add_argument("--methods", help="comma-separated subset (default: all)")
+    study.add_argument(
+        "--methods",
+        help="comma-separated subset of inference, inference_blocked, inference_contact, "
+        "random, nominal, oracle (default: all)",
+    )
     study.add_argument(
         "--discard-below",
         type=float,
@@ -232,7 +236,9 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
         help="inference gives up when the best expected success falls below this (0: never)",
     )
     study.add_argument(
-        "--physics", action="store_true", help="outcomes and blocked pins from MuJoCo contact"
+        "--physics",
+        action="store_true",
+        help="outcomes, blocked pins and touch bearings from MuJoCo contact physics",
     )
     study.add_argument("--json", metavar="OUT.json", help="write the figures as JSON")
     study.add_argument("--plot", metavar="OUT.png", help="save the cumulative-success plot")

@@ -7,17 +7,20 @@ true pose ``s̄_j`` (perfect measurement, the paper's eq. for ``p(ε | I_1..m, s
     p(ε | history) ∝ p(ε) Π_j p(I_j | s̄_j, ε)
 
 With contact evidence ``b_j`` (which pins the board blocked) a failed attempt's factor is
-``Π_i 1[pin i in its hole at s̄_j] = 1 - b_ji``. With measured poses ``ŝ_j = s̄_j + ν``,
-``ν ~ N(0, diag(noise²))``, each factor is integrated over the noise (the paper's ``g′``)::
+``Π_i 1[pin i in its hole at s̄_j] = 1 - b_ji``; with touch bearings ``φ_ji`` of the blocked
+pins it is multiplied by ``Π_i exp(κ (cos(φ_ji − ∠gap_ji(ε)) − 1))``, ``κ = 1 / noise²``
+(a von Mises density around the direction of the pin's gap to its hole). With measured
+poses ``ŝ_j = s̄_j + ν``, ``ν ~ N(0, diag(noise²))``, each factor is integrated over the
+noise (the paper's ``g′``)::
 
     p(I_j | ŝ_j, ε) = ∫ p(I_j | s̄, ε) N(s̄; ŝ_j, diag(noise²)) ds̄ ≈ 1/K Σ_k p(I_j | ŝ_j + ν_k, ε)
 
-Samples are drawn from the prior and importance-weighted; when the effective sample size
-falls below a quarter, they are resampled and moved by Metropolis steps on
-``p(ε) Π_j p(I_j | ·, ε)`` (sequential Monte Carlo's resample-move). When no prior sample
-explains the history, they are moved through tempered targets ``p(ε) Π_j max(p_j, e^{-λ})``,
-λ = 1…16 (a narrow posterior, e.g. after contacts); failing that, the prior is widened (×2,
-×4, importance-corrected) before giving up with ``explained=False``.
+``OVERSAMPLE × n`` samples are drawn from the prior and importance-weighted, then ``n`` of
+them resampled and moved by Metropolis steps on ``p(ε) Π_j p(I_j | ·, ε)`` (sequential
+Monte Carlo's resample-move). When no prior sample explains the history, they are moved
+through tempered targets ``p(ε) Π_j max(p_j, e^{-λ})``, λ = 1…16 (a narrow posterior, e.g.
+after contacts); failing that, the prior is widened (×2, ×4, importance-corrected) before
+giving up with ``explained=False``.
 """
 
 from __future__ import annotations

@@ -39,6 +39,7 @@ from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import CircularSocket
 from tolins.inference.goal import next_goal
 from tolins.inference.history import History
+from tolins.inference.physics import touch_bearings
 from tolins.paper import A_MAX
 
 Policy = Callable[[np.ndarray], np.ndarray]
@@ -140,8 +141,7 @@ class InferenceGuidedPolicy:
             pins = forces > self.touch_force
             if not pins.any():  # the board pushes back: at least the most loaded pin
                 pins[int(np.argmax(forces))] = True
-            towards = self.env.backend.pin_touch_points() - self.spec.hole_centers
-            bearings = np.where(pins, np.arctan2(towards[:, 1], towards[:, 0]), np.nan)
+            bearings = touch_bearings(self.env.backend, pins)
         self.history = self.history.append(pose, False, pins, bearings)
         result = next_goal(self.spec, self.history, self.sigma, self.rng, n_samples=self.n_samples)
         self.results.append(result)

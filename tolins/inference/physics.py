@@ -42,9 +42,14 @@ def physics_attempt(
             free = np.zeros(backend.spec.n_pins, dtype=bool)
             return True, free, np.full(backend.spec.n_pins, np.nan)
     blocked = backend.pin_forces() > touch_force
+    return False, blocked, touch_bearings(backend, blocked)
+
+
+def touch_bearings(backend: MujocoBackend, blocked: np.ndarray) -> np.ndarray:
+    """The bearing (rad) of each ``blocked`` pin's touch point seen from its hole's centre;
+    NaN for the other pins (``History.bearings``)."""
     towards = backend.pin_touch_points() - backend.spec.hole_centers
-    bearings = np.arctan2(towards[:, 1], towards[:, 0])
-    return False, blocked, np.where(blocked, bearings, np.nan)
+    return np.where(blocked, np.arctan2(towards[:, 1], towards[:, 0]), np.nan)
 
 
 def make_backend(spec: CircularSocket) -> MujocoBackend:

@@ -205,12 +205,7 @@ def pins_inside(spec: CircularSocket, offsets: object, poses: object) -> np.ndar
     bool array ``broadcast(offsets.shape[:-2], poses.shape[:-1]) + (n_pins,)``;
     ``pins_inside(...).all(-1)`` is :func:`contains` of each offset workpiece.
     """
-    if not isinstance(spec, CircularSocket):
-        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
-    array = _checked_poses(poses)
-    eps = _checked_offsets(spec, offsets)
-    gaps = _pin_gaps(spec.hole_centers, eps, array)
-    return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
+    return gaps_inside(spec, pin_gaps(spec, offsets, poses))
 
 
 def pin_gaps(spec: CircularSocket, offsets: object, poses: object) -> np.ndarray:
@@ -222,7 +217,13 @@ def pin_gaps(spec: CircularSocket, offsets: object, poses: object) -> np.ndarray
     """
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
-    return _pin_gaps(spec.hole_centers, _checked_offsets(spec, offsets), _checked_poses(poses))
+    array = _checked_poses(poses)
+    return _pin_gaps(spec.hole_centers, _checked_offsets(spec, offsets), array)
+
+
+def gaps_inside(spec: CircularSocket, gaps: np.ndarray) -> np.ndarray:
+    """Whether each pin with gap ``gaps`` ``(..., 2)`` (:func:`pin_gaps`) is in its hole."""
+    return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
 
 
 def _pin_gaps(holes: np.ndarray, eps: np.ndarray, poses: np.ndarray) -> np.ndarray:

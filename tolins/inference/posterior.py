@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket
-from tolins.geometry.tolerance import pin_gaps
+from tolins.geometry.tolerance import gaps_inside, pin_gaps
 from tolins.inference.history import History
 
 #: Noise draws per measured attempt (``K`` above).
@@ -87,7 +87,7 @@ def log_likelihood(
         poses = poses + noise_draws
     # gaps: (N, m, K, n_pins, 2); inside: (N, m, K, n_pins)
     gaps = pin_gaps(spec, offsets[:, None, None], poses[None])
-    inside = np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
+    inside = gaps_inside(spec, gaps)
     if history.blocked is None:
         fits = inside.all(-1) == history.inserted[None, :, None]
     else:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket
-from tolins.geometry.tolerance import pin_gaps, pins_inside
+from tolins.geometry.tolerance import gaps_inside, pin_gaps, pins_inside
 from tolins.inference.goal import centre_goals, next_goal
 from tolins.inference.history import History
 
@@ -173,7 +173,7 @@ def geometry_outcome(eps: np.ndarray) -> Outcome:
 
     def attempt(goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         gaps = pin_gaps(SOCKET, eps, goal)
-        inside = np.sum(gaps * gaps, axis=-1) <= SOCKET.clearance**2
+        inside = gaps_inside(SOCKET, gaps)
         return inside, np.where(inside, np.nan, np.arctan2(gaps[:, 1], gaps[:, 0]))
 
     return attempt

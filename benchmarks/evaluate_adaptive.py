@@ -56,7 +56,7 @@ def evaluate(entry: str, variant: str, env_id: str, episodes: int) -> tuple[Summ
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("policies", nargs="+", help="expert name or NAME=PATH")
-    parser.add_argument("--env", default="tolins/Circle2x1Defective-v0")
+    parser.add_argument("--env", default="tolins/Circle2x1Defective-v1")
     parser.add_argument("--episodes", type=int, default=100)
     args = parser.parse_args()
     torch.set_num_threads(1)

@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/evaluate_policies.py --env tolins/Circle2x2-v0 --episodes 100 \\
+    python benchmarks/evaluate_policies.py --env tolins/Circle2x2-v1 --episodes 100 \\
         safe pi_bc=runs/bc/policy.pt pi_n=runs/pi_n/policy.pt
 
 Each policy is an expert name (``safe``, ``efficient``) or ``NAME=PATH`` of a policy saved

@@ -30,7 +30,7 @@ from tolins.record import RerunRecorder
 from tolins.rollout import run_episode
 
 #: Square is the cheapest to simulate, so the worst case for the relative overhead.
-ENVS = ("tolins/Square-v0", "tolins/Hexagon-v0", "tolins/Circle2x2-v0", "tolins/Circle2x8-v0")
+ENVS = ("tolins/Square-v1", "tolins/Hexagon-v1", "tolins/Circle2x2-v1", "tolins/Circle2x8-v1")
 TARGET = 0.10
 
 

@@ -53,7 +53,7 @@ def test_nominal_workpiece_never_changes_goal() -> None:
 
 def test_deterministic_for_a_seed() -> None:
     def run(seed: int) -> tuple:
-        env = gym.make("tolins/Circle2x1Defective-v0").unwrapped
+        env = gym.make("tolins/Circle2x1Defective-v1").unwrapped
         wrapper = InferenceGuidedPolicy(SafeExpert(), env, contact=False)
         episodes = []
         for s in (seed, seed + 1, seed + 2):

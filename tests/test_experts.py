@@ -17,7 +17,7 @@ from tolins.policies import EfficientExpert, SafeExpert
 from tolins.rollout import Episode, run_episode, summarise
 
 
-def _summary(policy, gym_id: str = "tolins/Circle2x2-v0", episodes: int = 20):
+def _summary(policy, gym_id: str = "tolins/Circle2x2-v1", episodes: int = 20):
     env = gym.make(gym_id).unwrapped
     return summarise([run_episode(env, policy, seed=s) for s in range(episodes)])
 

@@ -145,7 +145,7 @@ def _rollout(gym_id: str, seed: int) -> list[np.ndarray]:
     return random_rollout(gym.make(gym_id, backend="kinematic"), seed, shape=_mostly_down)
 
 
-@pytest.mark.parametrize("gym_id", ["tolins/Circle2x2-v0", "tolins/Circle2x1Defective-v0"])
+@pytest.mark.parametrize("gym_id", ["tolins/Circle2x2-v1", "tolins/Circle2x1Defective-v1"])
 def test_same_seed_same_trajectory(gym_id: str) -> None:
     first, second = _rollout(gym_id, 3), _rollout(gym_id, 3)
     assert len(first) == len(second)

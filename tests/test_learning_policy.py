@@ -16,7 +16,7 @@ from tolins.learning.policy_config import BCConfig, RSGailConfig
 from tolins.paper import A_MAX
 from tolins.policies import SafeExpert
 
-ENV = "tolins/Circle2x2-v0"
+ENV = "tolins/Circle2x2-v1"
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig
 from tolins.learning.rs_gail import Workpiece, train_rs_gail
 from tolins.learning.tolerance_guided import train_tolerance_guided
 
-ENV = "tolins/Circle2x2-v0"
+ENV = "tolins/Circle2x2-v1"
 TINY = {"popsize": 6, "episodes": 2, "eval_episodes": 4, "sigma0": 0.05}
 
 
@@ -135,7 +135,7 @@ def test_stop_rule_ends_a_stalled_run(demos, bc_policy, tmp_path):
 def test_tolerance_guided_trains_only_the_residual(demos, bc_policy, tmp_path):
     pieces = [
         Workpiece(ENV, np.array([3.7, -10.7, 12.2, -13.0, 3.2])),
-        Workpiece("tolins/Circle2x8-v0", np.array([3.4, -9.5, 10.9, -11.6, 2.9])),
+        Workpiece("tolins/Circle2x8-v1", np.array([3.4, -9.5, 10.9, -11.6, 2.9])),
     ]
     result = train_tolerance_guided(
         bc_policy,
@@ -203,8 +203,8 @@ def test_workpieces_carry_the_embedding_of_their_socket():
     from tolins.embedding import encode
     from tolins.learning.tolerance_guided import workpieces
 
-    (piece,) = workpieces(["tolins/Circle2x4-v0"])
-    socket = gym.spec("tolins/Circle2x4-v0").kwargs["socket"]
+    (piece,) = workpieces(["tolins/Circle2x4-v1"])
+    socket = gym.spec("tolins/Circle2x4-v1").kwargs["socket"]
     np.testing.assert_array_equal(piece.embedding, encode(socket))
     with pytest.raises(ValueError, match="one each"):
         workpieces([ENV], embeddings=[])

@@ -27,7 +27,7 @@ from tolins.record import RerunRecorder, check_rrd, record_episodes, replay
 from tolins.record.geometry import board_geometry, pin_geometry, prism_mesh
 from tolins.record.metadata import spec_from_dict, spec_to_dict
 
-ENVS = ["tolins/Square-v0", "tolins/Circle2x2-v0"]
+ENVS = ["tolins/Square-v1", "tolins/Circle2x2-v1"]
 EPISODES = 2
 RERUN = Path(sys.executable).with_name("rerun")
 
@@ -174,7 +174,7 @@ def test_episodes_are_separable_with_their_metadata(recording: tuple) -> None:
 
 def test_bent_pins_are_logged_per_episode(tmp_path: Path) -> None:
     path = tmp_path / "bent.rrd"
-    env = gym.make("tolins/Circle2x1Defective-v0")
+    env = gym.make("tolins/Circle2x1Defective-v1")
     record_episodes(env, SafeExpert(), 2, path, seed=0)
     tables = _read(path)
     centers = []
@@ -212,7 +212,7 @@ def test_headless_screenshot_shows_the_parts(tmp_path: Path) -> None:
     from PIL import Image
 
     path = tmp_path / "circle.rrd"
-    record_episodes(gym.make("tolins/Circle2x2-v0"), SafeExpert(), 1, path, seed=0)
+    record_episodes(gym.make("tolins/Circle2x2-v1"), SafeExpert(), 1, path, seed=0)
     shot = tmp_path / "shot.png"
     assert replay(path, screenshot=shot) == 0
     image = np.asarray(Image.open(shot).convert("RGB")).astype(int)
@@ -233,7 +233,7 @@ def test_replay_rejects_missing_and_corrupt_files(
     junk = tmp_path / "junk.rrd"
     junk.write_text("not a recording")
     truncated = tmp_path / "truncated.rrd"
-    record_episodes(gym.make("tolins/Square-v0"), SafeExpert(), 1, truncated)
+    record_episodes(gym.make("tolins/Square-v1"), SafeExpert(), 1, truncated)
     truncated.write_bytes(truncated.read_bytes()[:3000])
     for path, what in (
         (tmp_path / "missing.rrd", "no such file"),
@@ -293,15 +293,15 @@ def test_native_replay_without_a_display_says_so(
 
 def test_record_cli_writes_a_verified_file(tmp_path: Path, capsys) -> None:
     out = tmp_path / "new" / "cli.rrd"  # the folder is created
-    argv = ["record", "--env", "tolins/Circle2x1-v0", "--policy", "efficient"]
+    argv = ["record", "--env", "tolins/Circle2x1-v1", "--policy", "efficient"]
     assert main([*argv, "--episodes", "2", "--out", str(out), "--seed", "3"]) == 0
     assert "2 episodes" in capsys.readouterr().out
     assert check_rrd(out) > 0
     tables = _read(out)
     assert [tables[f"/metadata/episode_{k:03d}#static"]["seed"] for k in (0, 1)] == [[[3]], [[4]]]
     assert sorted(p.name for p in out.parent.iterdir()) == ["cli.rrd"]  # no temporary left
-    assert main(["record", "--env", "tolins/Nope-v0", "--out", str(out)]) == 2
-    assert main(["record", "--env", "tolins/Square-v0", "--out", str(tmp_path / "x.txt")]) == 2
+    assert main(["record", "--env", "tolins/Nope-v1", "--out", str(out)]) == 2
+    assert main(["record", "--env", "tolins/Square-v1", "--out", str(tmp_path / "x.txt")]) == 2
 
 
 def test_a_failed_recording_leaves_no_file(tmp_path: Path) -> None:
@@ -315,7 +315,7 @@ def test_a_failed_recording_leaves_no_file(tmp_path: Path) -> None:
         return np.zeros(4)
 
     with pytest.raises(RuntimeError, match="policy failed"):
-        record_episodes(gym.make("tolins/Square-v0"), failing, 1, tmp_path / "x.rrd")
+        record_episodes(gym.make("tolins/Square-v1"), failing, 1, tmp_path / "x.rrd")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -341,7 +341,7 @@ def test_spec_round_trip_and_recorder_validation(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="not an InsertionEnv"):
         RerunRecorder(gym.make("CartPole-v1"), tmp_path / "x.rrd")
     with pytest.raises(ValueError, match=r"\.rrd"):
-        RerunRecorder(gym.make("tolins/Square-v0"), tmp_path / "x.txt")
+        RerunRecorder(gym.make("tolins/Square-v1"), tmp_path / "x.txt")
 
 
 def test_nothing_in_tolins_imports_record() -> None:

@@ -11,14 +11,14 @@ from tolins.envs import GENERIC_ID, TASKS, InsertionEnv
 from tolins.envs.tasks import DEFECT_SIGMA, register_envs
 
 PAPER_IDS = [
-    "tolins/Circle2x1-v0",
-    "tolins/Circle2x2-v0",
-    "tolins/Circle2x4-v0",
-    "tolins/Circle2x8-v0",
-    "tolins/Circle2x1Defective-v0",
-    "tolins/Square-v0",
-    "tolins/Pentagon-v0",
-    "tolins/Hexagon-v0",
+    "tolins/Circle2x1-v1",
+    "tolins/Circle2x2-v1",
+    "tolins/Circle2x4-v1",
+    "tolins/Circle2x8-v1",
+    "tolins/Circle2x1Defective-v1",
+    "tolins/Square-v1",
+    "tolins/Pentagon-v1",
+    "tolins/Hexagon-v1",
 ]
 
 
@@ -62,7 +62,7 @@ def test_generic_id_takes_socket_and_backend_kwargs() -> None:
 )
 def test_make_vec(mode: str, vector_kwargs: dict) -> None:
     envs = gym.make_vec(
-        "tolins/Square-v0", num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs
+        "tolins/Square-v1", num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs
     )
     try:
         observations, infos = envs.reset(seed=[1, 2])
@@ -79,8 +79,8 @@ def test_make_vec(mode: str, vector_kwargs: dict) -> None:
 
 
 def test_vector_env_matches_single_envs() -> None:
-    envs = gym.make_vec("tolins/Circle2x2-v0", num_envs=2, vectorization_mode="sync")
-    singles = [gym.make("tolins/Circle2x2-v0") for _ in range(2)]
+    envs = gym.make_vec("tolins/Circle2x2-v1", num_envs=2, vectorization_mode="sync")
+    singles = [gym.make("tolins/Circle2x2-v1") for _ in range(2)]
     observations, _ = envs.reset(seed=[5, 6])
     for i, env in enumerate(singles):
         assert np.array_equal(env.reset(seed=5 + i)[0], observations[i])

@@ -1,6 +1,6 @@
 """tolins: a contact-physics benchmark for delicate industrial insertion.
 
-Importing tolins registers its environments with gymnasium (``tolins/...-v0``).
+Importing tolins registers its environments with gymnasium (``tolins/...-v1``).
 """
 
 import os

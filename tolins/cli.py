@@ -164,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.set_defaults(run=_demo)
     record = commands.add_parser("record", help="record expert episodes to a rerun .rrd file")
-    record.add_argument("--env", required=True, help="env id, e.g. tolins/Circle2x2-v0")
+    record.add_argument("--env", required=True, help="env id, e.g. tolins/Circle2x2-v1")
     record.add_argument("--policy", default="safe", choices=["safe", "efficient"], help="expert")
     record.add_argument("--episodes", type=_positive_int, default=5, help="episodes")
     record.add_argument("--out", required=True, help="output file, FILE.rrd")

@@ -262,7 +262,7 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
 
 
 def _short(env_id: str) -> str:
-    return env_id.removeprefix("tolins/").removesuffix("-v0")
+    return env_id.removeprefix("tolins/").removesuffix("-v1")
 
 
 def _command(config) -> str:

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-CIRCLE_2X1_DEFECTIVE = "tolins/Circle2x1Defective-v0"
-CIRCLE_2X2 = "tolins/Circle2x2-v0"
-CIRCLE_2X4 = "tolins/Circle2x4-v0"
-CIRCLE_2X8 = "tolins/Circle2x8-v0"
-SQUARE = "tolins/Square-v0"
-PENTAGON = "tolins/Pentagon-v0"
-HEXAGON = "tolins/Hexagon-v0"
+CIRCLE_2X1_DEFECTIVE = "tolins/Circle2x1Defective-v1"
+CIRCLE_2X2 = "tolins/Circle2x2-v1"
+CIRCLE_2X4 = "tolins/Circle2x4-v1"
+CIRCLE_2X8 = "tolins/Circle2x8-v1"
+SQUARE = "tolins/Square-v1"
+PENTAGON = "tolins/Pentagon-v1"
+HEXAGON = "tolins/Hexagon-v1"
 
 
 @dataclass(frozen=True)

@@ -88,7 +88,13 @@ class InsertionEnv(gym.Env):
     ``peak_force``, ``step``, ``goal``, ``reward_success``, ``reward_collision``, and
     ``error`` after a fault.
 
-    Version history: v0, the first release.
+    Version history:
+
+    * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
+      ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
+      the carrier collides with the board's top; reset poses and goals are validated;
+      stepping after the episode ended raises.
+    * v0 (tolins 0.1.0): the first release.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}

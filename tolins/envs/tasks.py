@@ -20,7 +20,7 @@ class Task:
     """One preset workpiece.
 
     Attributes:
-        name: Gymnasium name, ``tolins/{name}-v0``.
+        name: Gymnasium name, ``tolins/{name}-v1``.
         domain: dm_control domain name (task ``insert``).
         socket: The (nominal) socket.
         tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``.
@@ -35,7 +35,7 @@ class Task:
 
     @property
     def gym_id(self) -> str:
-        return f"tolins/{self.name}-v0"
+        return f"tolins/{self.name}-v1"
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
@@ -72,7 +72,7 @@ TASKS: tuple[Task, ...] = (
     _polygon("Hexagon", 6, 1.2, 1.26),
 )
 #: The generic id; pass ``socket=`` (and any other keyword) to ``gymnasium.make``.
-GENERIC_ID = "tolins/Insert-v0"
+GENERIC_ID = "tolins/Insert-v1"
 
 
 def register_envs() -> None:

@@ -27,7 +27,7 @@ def add_train_parser(commands: argparse._SubParsersAction) -> None:
     for method, configs in _CONFIGS.items():
         parser = methods.add_parser(method, help=_HELP[method])
         env_help = "env ids, comma-separated" if method == "tolerance-guided" else "env id"
-        parser.add_argument("--env", required=True, help=f"{env_help}, e.g. tolins/Circle2x2-v0")
+        parser.add_argument("--env", required=True, help=f"{env_help}, e.g. tolins/Circle2x2-v1")
         parser.add_argument("--out", required=True, help="output folder")
         for config in configs:
             add_config_arguments(parser, config)

@@ -1,0 +1,191 @@
+"""Interval estimates of the bench's figures, with training seeds as the unit (rliable).
+
+Every policy of the bench is trained once per training seed, and training varies far more
+than evaluation does (paper profile, 3 seeds: a row's per-seed mean reward spreads by up
+to 2.07, while its 100 evaluation episodes put the mean within about ±0.5). So an
+interval is over **training seeds** whenever there are two or more: the samples are the
+per-seed means, resampled by rliable's stratified bootstrap
+(:func:`rliable.library.get_interval_estimates`, percentile method, :data:`REPS`
+replications, 95 %). With one training seed the samples are the evaluation episodes
+(``over == "episodes"``), and the interval says nothing about training variance.
+
+Verdicts (:func:`sign`) are three-valued: an interval above 0 is positive, below 0
+negative, one that contains 0 undecided. **One-seed rule**: an interval over episodes
+decides only when it clears ``±`` :data:`ONE_SEED_MARGIN` (5.9 reward) entirely. The margin
+is the training noise a single seed cannot show: two rows whose per-seed means each
+spread by :data:`TRAINING_SPREAD` (the largest std over seeds the paper profile measured,
+C4.1 2.07; C2.2 2.06, P2.2 1.99, C1.2 1.80) differ by training alone with a std of up to
+√2 × 2.07 = 2.9, and 2 × 2.9 is its 95 % bound. So an episode-level difference is called
+only when its whole episode-level CI lies beyond what retraining could plausibly undo;
+anything smaller (e.g. +0.8 ± 0.6) is inconclusive, however many standard errors it is.
+
+rliable draws its resamples from numpy's global RNG; every estimate here seeds it with
+:data:`BOOTSTRAP_SEED` and restores it afterwards (under a lock), so the same data give
+the same interval, in any order, and nobody else's global random stream moves.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+CONFIDENCE = 0.95
+REPS = 2000
+BOOTSTRAP_SEED = 0
+SEEDS, EPISODES = "seeds", "episodes"
+#: Largest std of a row's per-seed mean reward measured on the paper profile (3 seeds).
+TRAINING_SPREAD = 2.07
+#: An interval over episodes (one training seed) decides only beyond ± this (reward).
+ONE_SEED_MARGIN = round(2 * math.sqrt(2) * TRAINING_SPREAD, 1)
+#: The figures of a row, in the order of results.json.
+FIGURES = ("reward", "success", "steps", "collisions")
+
+_LOCK = threading.Lock()
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A point estimate and its 95 % bootstrap CI over ``n`` samples of kind ``over``."""
+
+    estimate: float
+    low: float
+    high: float
+    over: str
+    n: int
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "estimate": self.estimate,
+            "ci": [self.low, self.high],
+            "over": self.over,
+            "n": self.n,
+        }
+
+    def format(self, digits: int = 2, signed: bool = False) -> str:
+        """``estimate [low, high]``, e.g. ``+1.20 [+0.31, +2.05]``."""
+        spec = f"{'+' if signed else ''}.{digits}f"
+        return f"{self.estimate:{spec}} [{self.low:{spec}}, {self.high:{spec}}]"
+
+
+@contextmanager
+def _seeded_global_rng() -> Iterator[None]:
+    with _LOCK:
+        state = np.random.get_state()
+        np.random.seed(BOOTSTRAP_SEED)
+        try:
+            yield
+        finally:
+            np.random.set_state(state)
+
+
+def _estimate(
+    scores: np.ndarray | list[np.ndarray], func: Callable[..., np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """rliable's point estimate and (2, k) CI of ``func`` on ``scores`` (runs × tasks)."""
+    import warnings
+
+    from rliable import library
+
+    with _seeded_global_rng(), warnings.catch_warnings():
+        # arch warns when every resample gives the same value (a CI of width 0 is right).
+        warnings.simplefilter("ignore", RuntimeWarning)
+        point, interval = library.get_interval_estimates(
+            {"x": scores}, func, reps=REPS, confidence_interval_size=CONFIDENCE
+        )
+    return np.asarray(point["x"], dtype=float), np.asarray(interval["x"], dtype=float)
+
+
+def _samples(values: Sequence[float], what: str) -> np.ndarray:
+    array = np.asarray(values, dtype=float)
+    if array.ndim != 1 or len(array) == 0 or not np.all(np.isfinite(array)):
+        raise ValueError(f"{what}: {len(array)} values; allowed: ≥ 1 finite number")
+    return array
+
+
+def row_intervals(values: dict[str, list[list[float]]]) -> dict[str, Any]:
+    """The interval keys of a ``results.json`` entry from its episodes' ``values`` (figure →
+    one list of episode values per training seed): ``{figure}_ci`` (95 % CI of the mean),
+    ``reward_iqm`` and ``reward_iqm_ci`` (IQM of the per-seed means), ``ci_over`` and
+    ``ci_n`` (seeds when ≥ 2, else the one seed's episodes)."""
+    seeds = values["reward"]
+    if not seeds or not all(seeds):
+        raise ValueError("no episodes; allowed: ≥ 1 episode per training seed")
+    over = SEEDS if len(seeds) > 1 else EPISODES
+    if over == SEEDS:
+        columns = [[float(np.mean(s)) for s in values[name]] for name in FIGURES]
+    else:
+        columns = [list(values[name][0]) for name in FIGURES]
+    scores = np.asarray(columns, dtype=float).T
+
+    def func(x: np.ndarray) -> np.ndarray:
+        from rliable import metrics
+
+        return np.concatenate([x.mean(axis=0), [metrics.aggregate_iqm(x[:, 0])]])
+
+    point, interval = _estimate(scores, func)
+    entry: dict[str, Any] = {
+        f"{name}_ci": [float(interval[0, i]), float(interval[1, i])]
+        for i, name in enumerate(FIGURES)
+    }
+    entry["reward_iqm"] = float(point[-1])
+    entry["reward_iqm_ci"] = [float(interval[0, -1]), float(interval[1, -1])]
+    entry["ci_over"] = over
+    entry["ci_n"] = len(scores)
+    return entry
+
+
+def difference(
+    x: Sequence[float], y: Sequence[float], over: str, *, paired: bool = False
+) -> Interval:
+    """mean(x) − mean(y) with its CI. ``paired`` (equal lengths, sample i of both shares a
+    training seed or an evaluation episode's seed): the bootstrap resamples the pairs'
+    differences; otherwise x and y are resampled independently (rliable's
+    ``StratifiedIndependentBootstrap``)."""
+    a, b = _samples(x, "x"), _samples(y, "y")
+    if paired:
+        if len(a) != len(b):
+            raise ValueError(f"paired samples of {len(a)} and {len(b)}; allowed: equal lengths")
+        point, interval = _estimate((a - b)[:, None], lambda d: np.array([d.mean()]))
+    else:
+        point, interval = _estimate(
+            [a[:, None], b[:, None]], lambda p, q: np.array([p.mean() - q.mean()])
+        )
+    n = len(a) if paired else min(len(a), len(b))
+    return Interval(float(point[0]), float(interval[0, 0]), float(interval[1, 0]), over, n)
+
+
+def probability_of_improvement(x: Sequence[float], y: Sequence[float], over: str) -> Interval:
+    """P(X > Y) (rliable's Mann-Whitney form: a random sample of x beats one of y, ties
+    half) with its CI, x and y resampled independently."""
+    from rliable import metrics
+
+    a, b = _samples(x, "x")[:, None], _samples(y, "y")[:, None]
+    point, interval = _estimate(
+        [a, b], lambda p, q: np.array([metrics.probability_of_improvement(p, q)])
+    )
+    return Interval(
+        float(point[0]), float(interval[0, 0]), float(interval[1, 0]), over, min(len(a), len(b))
+    )
+
+
+def margin(interval: Interval) -> float:
+    """How far from 0 ``interval`` must lie to decide: 0 over seeds, the one-seed margin
+    over episodes."""
+    return 0.0 if interval.over == SEEDS else ONE_SEED_MARGIN
+
+
+def sign(interval: Interval, margin_: float | None = None) -> int:
+    """+1 if the CI lies above ``margin_`` (default :func:`margin`), −1 below −margin, 0
+    if undecided."""
+    bound = margin(interval) if margin_ is None else margin_
+    if interval.low > bound:
+        return 1
+    if interval.high < -bound:
+        return -1
+    return 0

@@ -116,7 +116,7 @@ def test_out_of_range_actions_are_clipped() -> None:
 
 
 def test_step_before_reset_raises(env: InsertionEnv) -> None:
-    with pytest.raises(RuntimeError, match="reset"):
+    with pytest.raises(gym.error.ResetNeeded, match="reset"):
         env.step(np.zeros(4))
 
 

@@ -166,12 +166,14 @@ def test_one_pin_geom_and_tip_site_per_pin(spec: CircularSocket | PolygonSocket)
     assert tips == [f"pin{i}_tip" for i in range(spec.n_pins)]
     for g in pin_geoms:
         assert model.geom_bodyid[g] == pins_body
-    # The pins collide with the board and the board with the pins, nothing else does.
+    # The pins and the carrier above them collide with the board and the board with them,
+    # nothing else does.
+    carrier = _id(model, OBJ.mjOBJ_GEOM, "carrier")
     colliding = [
         g for g in range(model.ngeom) if model.geom_contype[g] or model.geom_conaffinity[g]
     ]
-    assert set(colliding) == set(pin_geoms) | set(_board_geoms(model))
-    for g in pin_geoms:
+    assert set(colliding) == {*pin_geoms, carrier} | set(_board_geoms(model))
+    for g in [*pin_geoms, carrier]:
         for b in _board_geoms(model):
             assert model.geom_contype[g] & model.geom_conaffinity[b]
             assert not model.geom_contype[g] & model.geom_conaffinity[g]

@@ -85,7 +85,7 @@ def test_bent_pins_insert_where_the_defect_allows_and_not_at_the_nominal_goal() 
 
 def test_force_and_torque_point_against_the_push() -> None:
     """A pin pressed sideways against a hole wall feels the wall push back."""
-    env = InsertionEnv(CIRCLE, measurement_noise=0)
+    env = InsertionEnv(CIRCLE, measurement_noise=0, success_depth=2.0)
     env.reset(seed=0, options={"pose": [0.0, 0.0, 0.0, -1.5]})
     _, _, _, _, info = env.step([A_MAX[0], 0.0, 0.0, 0.0])
     assert info["collision"]

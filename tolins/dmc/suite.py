@@ -10,6 +10,7 @@ from dm_control.utils import containers
 
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
+from tolins.envs.episode import check_control_dt
 from tolins.envs.tasks import TASKS, Task
 from tolins.paper import CONTROL_DT
 
@@ -31,6 +32,9 @@ def make_environment(
     if task.defect_sigma is not None:
         task_kwargs.setdefault("defect_sigma", task.defect_sigma)
     environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
+    environment_kwargs["control_timestep"] = check_control_dt(
+        environment_kwargs["control_timestep"]
+    )
     physics = InsertionPhysics.from_spec(task.socket)
     return control.Environment(physics, Insert(task.socket, **task_kwargs), **environment_kwargs)
 

@@ -13,7 +13,7 @@ from tolins.dmc.physics import InsertionPhysics
 from tolins.envs.episode import NO_SCORE, EpisodeScore, TaskSettings, check_action
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.validation import finite_vector
+from tolins.geometry.workspace import check_goal, check_pose
 from tolins.paper import A_MAX, HORIZON, POSE_NOISE_STD
 
 #: Observation names and sizes, in the order of the gym env's 8-vector.
@@ -48,8 +48,12 @@ class Insert(control.Task):
     ``[2.5, 2.5, 0.1, 2.5]``; larger values are clipped, NaN or inf raises ``ValueError``.
 
     **Reward** ``c (1 - k / k_max)`` (c = 100, k_max = ``horizon``) on the step ``k``
-    that succeeds (pin tips ``success_depth`` below the surface), plus -1 on every step
-    whose peak summed normal contact force exceeded ``collision_force``.
+    that succeeds (every pin ``success_depth`` deep in its own hole, the gym env's success),
+    plus -1 on every step
+    whose peak summed normal contact force exceeded ``collision_force``. That is
+    ``reward_mode="sparse"`` (the default); ``"dense"`` and ``"normalized_dense"`` are the
+    gym env's (``InsertionEnv``, :mod:`tolins.envs.reward`); ``last_score.reward_info()``
+    has the step's terms.
 
     **Episode end**: success (discount 0); ``horizon`` steps (discount 1; the task ends
     the episode itself, so a success on the last step still has discount 0); a
@@ -75,6 +79,7 @@ class Insert(control.Task):
         horizon: int = HORIZON,
         success_depth: float = 1.0,
         collision_force: float = 0.5,
+        reward_mode: str = "sparse",
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -86,10 +91,11 @@ class Insert(control.Task):
             collision_force=collision_force,
             defect_sigma=defect_sigma,
             initial_pose=initial_pose,
+            reward_mode=reward_mode,
         )
         self.socket = socket
-        self.goal = finite_vector("goal", goal, 3, "[x*, y*, theta*] in mm and rad")
-        self.pose = None if pose is None else finite_vector("pose", pose, 4, "[x, y, θ, z]")
+        self.goal = check_goal(goal)
+        self.pose = None if pose is None else check_pose(socket, pose)
         self.random = _generator(random)
         self.score = EpisodeScore(self.settings)
         self.last_score = NO_SCORE
@@ -103,9 +109,11 @@ class Insert(control.Task):
             self.socket = self.settings.draw_socket(self.random)
             physics.reload_from_spec(self.socket)
         if self.pose is not None:
-            pose = self.pose
+            pose = check_pose(self.socket, self.pose)
         else:
-            pose = self.settings.initial_pose.sample(self.random, self.goal)
+            pose = check_pose(
+                self.socket, self.settings.initial_pose.sample(self.random, self.goal)
+            )
         self.score.reset()
         self.last_score, self.error = NO_SCORE, None
         self._observation = self.settings.observe(physics.set_pose(pose), self.goal, self.random)
@@ -121,7 +129,7 @@ class Insert(control.Task):
             self.error = state.error
             self.last_score = self.score.fault()
             return
-        self.last_score = self.score.score(state)
+        self.last_score = self.score.score(state, self.socket)
         self._observation = self.settings.observe(state, self.goal, self.random)
 
     def get_observation(self, physics: InsertionPhysics) -> Observation:

@@ -9,16 +9,61 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.reward import RewardTerms, check_reward_mode, reward_terms
 from tolins.geometry.defects import sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 from tolins.geometry.validation import check_int, check_positive, finite_vector
-from tolins.paper import A_MAX, COLLISION_REWARD, HORIZON, POSE_NOISE_STD, SUCCESS_REWARD
+from tolins.geometry.workspace import GOAL_RANGE, THETA_RANGE, XY_RANGE, Z_MAX, in_holes
+from tolins.mjcf.model import TIMESTEP
+from tolins.paper import (
+    A_MAX,
+    COLLISION_REWARD,
+    CONTROL_DT,
+    HORIZON,
+    POSE_NOISE_STD,
+    SUCCESS_REWARD,
+)
 
 _A_MIN = -A_MAX
+#: Longest control period (s): four times the paper's.
+MAX_CONTROL_DT = 1.0
+
+
+def check_control_dt(control_dt: object) -> float:
+    """``control_dt`` (s) if finite, in ``(0, MAX_CONTROL_DT]`` and a whole number of MuJoCo
+    physics steps (:data:`~tolins.mjcf.model.TIMESTEP`); the same rule on every backend."""
+    allowed = (
+        f"allowed: a multiple of the {TIMESTEP} s physics step in (0, {MAX_CONTROL_DT}] s "
+        f"(the paper's: {CONTROL_DT})"
+    )
+    try:
+        value = float(control_dt)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"control_dt={control_dt!r} is not a number; {allowed}") from error
+    steps = round(value / TIMESTEP) if np.isfinite(value) else 0
+    if not 0 < value <= MAX_CONTROL_DT or abs(steps * TIMESTEP - value) > 1e-9:
+        raise ValueError(f"control_dt={control_dt!r} is not allowed; {allowed}")
+    return value
+
+
+def _check_initial_pose(distribution: InitialPoseDistribution) -> None:
+    """Every pose ``distribution`` can draw around any allowed goal is in the servo range."""
+    limits = (
+        ("radius_max", distribution.radius_max, XY_RANGE - GOAL_RANGE[0]),
+        ("theta_max", distribution.theta_max, THETA_RANGE - GOAL_RANGE[2]),
+        ("z_max", distribution.z_max, Z_MAX),
+    )
+    for name, value, limit in limits:
+        if value > limit:
+            raise ValueError(
+                f"initial_pose.{name}={value!r} reaches beyond the servo range; allowed: "
+                f"{name} ≤ {limit:.4g}"
+            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,6 +79,9 @@ class TaskSettings:
         collision_force: Summed normal contact force above which a step collides (N).
         defect_sigma: Bent-pin std (mm) re-drawn every episode, or ``None``.
         initial_pose: Distribution of the initial pose around the goal.
+        control_dt: Control period (s), see :func:`check_control_dt`.
+        reward_mode: ``sparse`` (the paper's), ``dense`` or ``normalized_dense``
+            (:mod:`tolins.envs.reward`).
     """
 
     socket: SocketSpec
@@ -44,6 +92,8 @@ class TaskSettings:
     collision_force: float = 0.5
     defect_sigma: float | None = None
     initial_pose: InitialPoseDistribution | None = None
+    control_dt: float = CONTROL_DT
+    reward_mode: str = "sparse"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -65,6 +115,9 @@ class TaskSettings:
         set_(self, "success_depth", check_positive("success_depth", self.success_depth))
         set_(self, "collision_force", check_positive("collision_force", self.collision_force, "N"))
         set_(self, "initial_pose", self.initial_pose or InitialPoseDistribution())
+        _check_initial_pose(self.initial_pose)
+        set_(self, "control_dt", check_control_dt(self.control_dt))
+        set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "_noise_std", np.concatenate([self.measurement_noise, self.force_noise]))
 
     def draw_socket(self, rng: np.random.Generator) -> SocketSpec:
@@ -73,8 +126,10 @@ class TaskSettings:
             return self.socket
         return sample_defects(self.socket, self.defect_sigma, rng)
 
-    def is_success(self, state: BackendState) -> bool:
-        return bool(state.pose[3] <= -self.success_depth)
+    def is_success(self, state: BackendState, socket: SocketSpec | None = None) -> bool:
+        """Every pin of ``socket`` (the episode's workpiece, default the nominal one) inside
+        its own hole, ``success_depth`` deep (:func:`~tolins.geometry.workspace.in_holes`)."""
+        return bool(in_holes(socket or self.socket, state.pose, self.success_depth))
 
     def observe(
         self, state: BackendState, goal: np.ndarray, rng: np.random.Generator
@@ -107,10 +162,20 @@ class StepScore:
     reward_success: float
     reward_collision: float
     truncated: bool
+    #: The dense modes' terms (:mod:`tolins.envs.reward`); ``None`` in the sparse mode.
+    terms: RewardTerms | None = None
 
     @property
     def reward(self) -> float:
+        if self.terms is not None:
+            return self.terms.total
         return self.reward_success + self.reward_collision
+
+    def reward_info(self) -> dict[str, float]:
+        """Every term of the reward as ``info`` keys ``reward_*`` (they sum to ``reward``)."""
+        if self.terms is not None:
+            return self.terms.to_info()
+        return RewardTerms(self.reward_success, self.reward_collision).to_info()
 
 
 #: The score before any step (after a reset).
@@ -120,33 +185,66 @@ NO_SCORE = StepScore(False, False, 0.0, 0.0, truncated=False)
 @dataclass
 class EpisodeScore:
     """Counts an episode's steps and collisions and scores each step with the paper's reward:
-    ``c (1 - k / k_max)`` on the step ``k`` that succeeds, -1 on every step with a collision."""
+    ``c (1 - k / k_max)`` on the step ``k`` that succeeds, -1 on every step with a collision.
+
+    ``over`` turns true with the step that succeeds, reaches the horizon or faults, and
+    stays true until :meth:`reset`: an ended episode scores nothing more.
+    """
 
     settings: TaskSettings
     steps: int = 0
     collisions: int = 0
+    over: bool = False
 
     def reset(self) -> None:
         self.steps = 0
         self.collisions = 0
+        self.over = False
 
-    def score(self, state: BackendState) -> StepScore:
-        """Score the step that produced ``state`` (a valid state, not a fault)."""
+    def check_running(self) -> None:
+        """``gymnasium.error.ResetNeeded`` if the episode has ended."""
+        if self.over:
+            raise gym.error.ResetNeeded(
+                "the episode has ended (success, horizon or simulator fault); call reset() "
+                "before stepping again"
+            )
+
+    def score(self, state: BackendState, socket: SocketSpec | None = None) -> StepScore:
+        """Score the step that produced ``state`` (a valid state, not a fault); ``socket``:
+        the episode's workpiece (default the nominal one)."""
+        self.check_running()
         self.steps += 1
         collision = state.peak_force > self.settings.collision_force
         self.collisions += int(collision)
-        success = self.settings.is_success(state)
+        success = self.settings.is_success(state, socket)
+        reward_success = (
+            SUCCESS_REWARD * (1 - self.steps / self.settings.horizon) if success else 0.0
+        )
+        reward_collision = COLLISION_REWARD if collision else 0.0
+        terms = None
+        if self.settings.reward_mode != "sparse":
+            terms = reward_terms(
+                self.settings.reward_mode,
+                reward_success,
+                reward_collision,
+                socket or self.settings.socket,
+                state.pose,
+                self.settings.success_depth,
+            )
+        truncated = not success and self.steps >= self.settings.horizon
+        self.over = success or truncated
         return StepScore(
             success=success,
             collision=collision,
-            reward_success=SUCCESS_REWARD * (1 - self.steps / self.settings.horizon)
-            if success
-            else 0.0,
-            reward_collision=COLLISION_REWARD if collision else 0.0,
-            truncated=not success and self.steps >= self.settings.horizon,
+            reward_success=reward_success,
+            reward_collision=reward_collision,
+            truncated=truncated,
+            terms=terms,
         )
 
     def fault(self) -> StepScore:
         """Count a step that ended in a simulator fault: no reward, the episode is over."""
+        self.check_running()
         self.steps += 1
+        self.over = True
         return StepScore(False, False, 0.0, 0.0, truncated=True)

@@ -14,7 +14,7 @@ from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.validation import finite_vector
+from tolins.geometry.workspace import check_goal, check_pose
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
@@ -56,9 +56,19 @@ class InsertionEnv(gym.Env):
     (``[x, y, theta, z]``, default the paper's ``[0.1, 0.1, 0, 0.1]``); forces carry
     ``force_noise`` (``[Fx, Fy, q_theta, Fz]``, default 0). ``0`` turns either off.
 
-    **Success**: the pin tips are at least ``success_depth`` (default 1 mm) below
-    the board surface, ``z ≤ -success_depth``. Physically this means every pin is
-    inside its hole. Success terminates the episode.
+    **Success**: every pin is inside its own hole: the pin tips are at least
+    ``success_depth`` (default 1 mm) below the board's top, ``z ≤ -success_depth``, and
+    each pin's axis lies within its hole's circumradius
+    (:func:`tolins.geometry.workspace.in_holes`, the same on both backends and in
+    dm_control). Success terminates the episode; stepping an ended episode (success,
+    horizon or fault) raises ``gymnasium.error.ResetNeeded``.
+
+    **Workspace**: the servos hold ``|x|, |y| ≤ 5`` mm, ``|theta| ≤ 0.3`` rad and
+    ``-4 ≤ z ≤ 40`` mm (:mod:`tolins.geometry.workspace`); the MuJoCo board covers every
+    place a pin can reach within it, and the carrier plate above the pins stops on the
+    board's top. ``reset`` raises ``ValueError`` for a pose outside this range or with a
+    pin inside the board, and for a goal more than 2 mm / 0.15 rad from the nominal one.
+    ``control_dt`` must be a whole number of 1 ms physics steps in (0, 1] s.
 
     **Collision**: a control step with a collision is one in which the summed normal
     force of all contacts between the board and the pins exceeded ``collision_force``
@@ -69,9 +79,28 @@ class InsertionEnv(gym.Env):
     binary 1 N on a step that collides (the motion into the obstacle stops, the rest of
     the step slides along it).
 
-    **Reward** ``reward_success + reward_collision``: ``c (1 - k / k_max)`` with
-    c = 100 on the step ``k`` (1-based) that succeeds, and -1 on every step with a
-    collision. ``info`` has both terms.
+    **Reward** (``reward_mode``, ManiSkill3's names; success and collision are the same in
+    every mode, and ``info`` has every term, ``reward_*``, summing to the reward):
+
+    * ``"sparse"`` (default, the paper's, Table 1): ``reward_success + reward_collision``,
+      ``c (1 - k / k_max)`` with c = 100 on the step ``k`` (1-based) that succeeds, and
+      -1 on every step with a collision.
+    * ``"dense"``: sparse plus four shaping terms of the true pose, each ≤ 0 and 0 only
+      once every pin is ``success_depth`` deep in its hole (so no term pays for hovering,
+      pushing on the board or leaving it, and success always beats staying in the episode):
+      ``reward_approach = -min(d / 5 mm, 1)`` (``d``: mean horizontal distance of the pins
+      to their holes; a polygon peg's vertices, theta modulo its symmetry);
+      ``reward_height = -clip(z, 0, 20 mm) / 20 mm`` (pin tips over the board's top);
+      ``reward_alignment = -0.5`` unless ``[x, y, theta]`` puts every pin over its own
+      hole (inside the tolerance); ``reward_depth = -0.5 (1 - aligned · clip(-z, 0,
+      success_depth) / success_depth)`` (insertion depth, counted only while aligned).
+    * ``"normalized_dense"``: the dense reward mapped affinely onto [0, 1]:
+      ``(r - lo) / (hi - lo)``, ``lo = -3 - 1``, ``hi = c``; each term is scaled and
+      ``reward_offset`` holds the shift. With success ending the episode the shift is a
+      small per-step bonus for staying in it; learn with ``dense``.
+
+    ``reward_offset`` is 0 and the shaping terms are 0 in the sparse mode. See
+    :mod:`tolins.envs.reward`.
 
     **Horizon**: the episode is truncated after ``horizon`` = 40 steps. A simulator
     fault (a MuJoCo warning or a non-finite state) also truncates it, with the
@@ -85,8 +114,9 @@ class InsertionEnv(gym.Env):
 
     **Info**: ``success``, ``is_success``, ``collision``, ``n_collisions``, ``pose``
     (true ``[x, y, theta, z]``), ``wrench`` (true ``[Fx, Fy, q_theta, Fz]``),
-    ``peak_force``, ``step``, ``goal``, ``reward_success``, ``reward_collision``, and
-    ``error`` after a fault.
+    ``peak_force``, ``step``, ``goal``, the reward terms ``reward_success``,
+    ``reward_collision``, ``reward_approach``, ``reward_height``, ``reward_alignment``,
+    ``reward_depth``, ``reward_offset``, and ``error`` after a fault.
 
     Version history:
 
@@ -113,6 +143,7 @@ class InsertionEnv(gym.Env):
         collision_force: float = 0.5,
         defect_sigma: float | None = None,
         initial_pose: InitialPoseDistribution | None = None,
+        reward_mode: str = "sparse",
         render_mode: str | None = None,
     ) -> None:
         if backend not in BACKENDS:
@@ -128,11 +159,13 @@ class InsertionEnv(gym.Env):
             collision_force=collision_force,
             defect_sigma=defect_sigma,
             initial_pose=initial_pose,
+            reward_mode=reward_mode,
+            control_dt=control_dt,
         )
         self.socket = socket
         self.backend_name = backend
         self.goal = goal
-        self.control_dt = float(control_dt)
+        self.control_dt = self.settings.control_dt
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
@@ -150,6 +183,7 @@ class InsertionEnv(gym.Env):
     collision_force = _setting("collision_force")
     defect_sigma = _setting("defect_sigma")
     initial_pose = _setting("initial_pose")
+    reward_mode = _setting("reward_mode")
 
     @property
     def goal(self) -> np.ndarray:
@@ -158,7 +192,7 @@ class InsertionEnv(gym.Env):
 
     @goal.setter
     def goal(self, value: Any) -> None:
-        self._goal = finite_vector("goal", value, 3, "[x*, y*, theta*] in mm and rad")
+        self._goal = check_goal(value)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -177,9 +211,9 @@ class InsertionEnv(gym.Env):
             self.backend = BACKENDS[self.backend_name](self.socket, self.control_dt)
             self.close()
         if "pose" in options:
-            pose = finite_vector("options['pose']", options["pose"], 4, "[x, y, theta, z]")
+            pose = check_pose(self.socket, options["pose"], "options['pose']")
         else:
-            pose = self.initial_pose.sample(self.np_random, self._goal)
+            pose = check_pose(self.socket, self.initial_pose.sample(self.np_random, self._goal))
         self._state = self.backend.reset(pose)
         self._score.reset()
         self._observation = self.settings.observe(self._state, self._goal, self.np_random)
@@ -187,21 +221,22 @@ class InsertionEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._state is None:
-            raise RuntimeError("step() called before reset()")
+            raise gym.error.ResetNeeded("step() called before reset()")
+        self._score.check_running()
         state = self.backend.step(check_action(action))
         if state.error is not None:
             info = self._info(self._score.fault())
             info["error"] = state.error
             return self._observation.copy(), 0.0, False, True, info
         self._state = state
-        score = self._score.score(state)
+        score = self._score.score(state, self.socket)
         self._observation = self.settings.observe(state, self._goal, self.np_random)
         info = self._info(score)
         return self._observation.copy(), score.reward, score.success, score.truncated, info
 
     def _info(self, score: StepScore) -> dict[str, Any]:
         state = self._state
-        success = self.settings.is_success(state)
+        success = self.settings.is_success(state, self.socket)
         return {
             "success": success,
             "is_success": success,
@@ -212,8 +247,7 @@ class InsertionEnv(gym.Env):
             "peak_force": state.peak_force,
             "step": self._score.steps,
             "goal": self._goal.copy(),
-            "reward_success": score.reward_success,
-            "reward_collision": score.reward_collision,
+            **score.reward_info(),
         }
 
     def render(self) -> np.ndarray | None:
@@ -223,6 +257,10 @@ class InsertionEnv(gym.Env):
             self._renderer = mujoco.Renderer(self.backend.model, 480, 640)
         self._renderer.update_scene(self.backend.data, camera="overview")
         return self._renderer.render()
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The renderer holds an OpenGL context, which cannot be copied; render() makes anew.
+        return {**self.__dict__, "_renderer": None}
 
     def close(self) -> None:
         if self._renderer is not None:

@@ -22,11 +22,15 @@ its motion; the rest of the step, the fraction ``1 - tau``, continues without th
   blocked horizontal motion and ``-1 N·mm`` against its rotation. An ascending step
   that leaves the hole after a wall contact ends at the contact's ``x, y, theta``.
 
+The workpiece stays in the servo range (:data:`~tolins.geometry.workspace.POSE_LOW` …
+``POSE_HIGH``): a step that would leave it stops at its edge, as the MuJoCo joints do,
+with no contact force; the lower end of z is the carrier plate on the board's top.
+
 The contact force is binary (:data:`CONTACT_FORCE`, :data:`CONTACT_TORQUE`);
 ``peak_force`` is 1 N for a step with a collision (top or wall) and 0 otherwise. There
-is no floor: inserted pins go down freely. A collision narrower than a sixteenth of the
-submerged step between two free samples would be missed (a thin sliver of wall; none
-at these clearances and speeds).
+is no floor: inserted pins go down freely to the carrier. A collision narrower than a
+sixteenth of the submerged step between two free samples would be missed (a thin
+sliver of wall; none at these clearances and speeds).
 """
 
 from __future__ import annotations
@@ -39,7 +43,8 @@ import numpy as np
 from tolins.envs.backend import BackendState
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import contains
-from tolins.geometry.validation import check_int
+from tolins.geometry.validation import check_int, checked_array
+from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
 from tolins.mjcf import make_mjcf
 
 #: The binary contact force (N) and torque (N·mm) of a colliding workpiece.
@@ -79,7 +84,7 @@ def kinematic_step(
     # Only the part of a step below the board's top, [t_in, t_out], can collide.
     rows = np.flatnonzero(np.minimum(poses[:, 3], new[:, 3]) < 0.0)
     if rows.size == 0:
-        return new, wrench, collided
+        return _in_range(new), wrench, collided
     z0, dz = poses[rows, 3], delta[rows, 3]
     crossing = -z0 / np.where(dz != 0.0, dz, 1.0)
     t_in = np.where(z0 > 0.0, crossing, 0.0)
@@ -93,14 +98,14 @@ def kinematic_step(
     collided[rows[landed]] = True
     rows, t_in, t_out = rows[~landed], t_in[~landed], t_out[~landed]
     if rows.size == 0:
-        return new, wrench, collided
+        return _in_range(new), wrench, collided
     # Walls: the first of _SAMPLES points below the top that collides, then bisection.
     taus = t_in[:, None] + (t_out - t_in)[:, None] * _FRACTIONS
     bad = colliding(spec, poses[rows, None, :] + taus[..., None] * delta[rows, None, :])
     hit = bad.any(axis=1)
     rows, taus, bad, t_in = rows[hit], taus[hit], bad[hit], t_in[hit]
     if rows.size == 0:
-        return new, wrench, collided
+        return _in_range(new), wrench, collided
     first = np.argmax(bad, axis=1)
     index = np.arange(rows.size)
     lo, hi = np.where(first > 0, taus[index, first - 1], t_in), taus[index, first]
@@ -113,7 +118,12 @@ def kinematic_step(
     new[rows, :3] = start[:, :3] + lo[:, None] * step[:, :3]
     wrench[rows] = _wall_wrench(velocities[rows])
     collided[rows] = True
-    return new, wrench, collided
+    return _in_range(new), wrench, collided
+
+
+def _in_range(poses: np.ndarray) -> np.ndarray:
+    """``poses`` stopped at the servo range, in place."""
+    return np.clip(poses, POSE_LOW, POSE_HIGH, out=poses)
 
 
 def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
@@ -126,18 +136,6 @@ def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
     )
     wrench[:, 2] = -CONTACT_TORQUE * np.sign(velocities[:, 2])
     return wrench
-
-
-def _checked(name: str, value: object, shape: tuple[int, ...], allowed: str) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}={value!r} is not numeric; allowed: {allowed}") from error
-    if array.shape != shape:
-        raise ValueError(f"{name} has shape {array.shape}; allowed: {shape} = {allowed}")
-    if not np.isfinite(array).all():
-        raise ValueError(f"{name}={array.tolist()!r} contains NaN or inf; allowed: {allowed}")
-    return array
 
 
 class KinematicBatch:
@@ -162,7 +160,7 @@ class KinematicBatch:
 
     def reset(self, poses: object) -> BatchState:
         """Place the workpieces at ``poses`` ``(n, 4)``; raises if one is inside the board."""
-        poses = _checked("poses", poses, (self.n, 4), "[x, y, theta, z] per workpiece")
+        poses = checked_array("poses", poses, (self.n, 4), "[x, y, theta, z] per workpiece")
         inside = colliding(self.spec, poses)
         if inside.any():
             row = int(np.argmax(inside))
@@ -175,7 +173,7 @@ class KinematicBatch:
 
     def step(self, velocities: object) -> BatchState:
         """Command ``velocities`` ``(n, 4)`` = ``[ux, uy, utheta, uz]`` for one control period."""
-        velocities = _checked("velocities", velocities, (self.n, 4), "[ux, uy, utheta, uz]")
+        velocities = checked_array("velocities", velocities, (self.n, 4), "[ux, uy, utheta, uz]")
         self._pose, wrench, collided = kinematic_step(
             self.spec, self._pose, velocities, self.control_dt
         )

@@ -23,6 +23,13 @@ from tolins.geometry.validation import check_int, check_positive
 MIN_WALL = 0.2
 #: Number of sides of the polygon that stands in for a circular hole (face distance = radius).
 CIRCLE_HOLE_SIDES = 16
+#: Most pins of a circular socket (a 20*20 socket) and most sides of a polygon peg: the
+#: model's size (and compile time) grows with both.
+MAX_PINS = 400
+MAX_SIDES = 64
+#: Largest bend of a pin (mm) along an axis with a single hole (along an axis with more,
+#: its cell bounds it): ten times the clearance of the paper's sockets.
+MAX_PIN_OFFSET = 2.0
 
 
 def polygon_vertices(sides: int, circumradius: float) -> np.ndarray:
@@ -65,6 +72,11 @@ class CircularSocket:
         set_ = object.__setattr__
         set_(self, "rows", check_int("rows", self.rows, minimum=1))
         set_(self, "cols", check_int("cols", self.cols, minimum=1))
+        if self.rows * self.cols > MAX_PINS:
+            raise ValueError(
+                f"rows={self.rows!r} × cols={self.cols!r} = {self.rows * self.cols} pins; "
+                f"allowed: at most {MAX_PINS} pins"
+            )
         for name in ("pin_radius", "hole_radius", "row_pitch", "col_pitch"):
             set_(self, name, check_positive(name, getattr(self, name)))
         if self.pin_radius >= self.hole_radius:
@@ -102,11 +114,11 @@ class CircularSocket:
             raise ValueError(
                 f"pin_offsets={array.tolist()!r} contains NaN or inf; allowed: finite mm"
             )
-        # A pin must stay in its cell; a direction with a single hole has no neighbour.
+        # A pin must stay in its cell; along an axis with a single hole, within MAX_PIN_OFFSET.
         half_cell = np.array(
             [
-                self.col_pitch / 2 - self.pin_radius if self.cols > 1 else np.inf,
-                self.row_pitch / 2 - self.pin_radius if self.rows > 1 else np.inf,
+                self.col_pitch / 2 - self.pin_radius if self.cols > 1 else MAX_PIN_OFFSET,
+                self.row_pitch / 2 - self.pin_radius if self.rows > 1 else MAX_PIN_OFFSET,
             ]
         )
         outside = np.any(np.abs(array) > half_cell, axis=1)
@@ -187,7 +199,9 @@ class PolygonSocket:
     hole_circumradius: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "sides", check_int("sides", self.sides, minimum=3))
+        object.__setattr__(
+            self, "sides", check_int("sides", self.sides, minimum=3, maximum=MAX_SIDES)
+        )
         for name in ("pin_circumradius", "hole_circumradius"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name)))
         if self.pin_circumradius >= self.hole_circumradius:

@@ -8,12 +8,17 @@ from numbers import Integral, Real
 import numpy as np
 
 
-def check_int(field: str, value: object, *, minimum: int) -> int:
-    """Return ``value`` as an int if it is an integer ≥ ``minimum``."""
+def check_int(field: str, value: object, *, minimum: int, maximum: int | None = None) -> int:
+    """Return ``value`` as an int if it is an integer in ``[minimum, maximum]``."""
+    allowed = (
+        f"an integer ≥ {minimum}" if maximum is None else f"{minimum} ≤ an integer ≤ {maximum}"
+    )
     if isinstance(value, bool) or not isinstance(value, Integral):
-        raise ValueError(f"{field}={value!r} is not an integer; allowed: an integer ≥ {minimum}")
+        raise ValueError(f"{field}={value!r} is not an integer; allowed: {allowed}")
     if value < minimum:
-        raise ValueError(f"{field}={value!r} is too small; allowed: an integer ≥ {minimum}")
+        raise ValueError(f"{field}={value!r} is too small; allowed: {allowed}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{field}={value!r} is too large; allowed: {allowed}")
     return int(value)
 
 
@@ -37,4 +42,17 @@ def finite_vector(field: str, value: object, size: int, allowed: str) -> np.ndar
         ) from error
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{field}={value!r} contains NaN or inf; allowed: {allowed}")
+    return array
+
+
+def checked_array(field: str, value: object, shape: tuple[int, ...], allowed: str) -> np.ndarray:
+    """``value`` as a float array of exactly ``shape`` with finite entries."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{field}={value!r} is not numeric; allowed: {allowed}") from error
+    if array.shape != shape:
+        raise ValueError(f"{field} has shape {array.shape}; allowed: {shape} = {allowed}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{field}={array.tolist()!r} contains NaN or inf; allowed: {allowed}")
     return array

@@ -1,7 +1,8 @@
 """Contact evidence from the physics: which pins the board blocked on an attempt, and where.
 
 An attempt places the workpiece ``start_height`` mm over the board at the goal and pushes
-straight down. It inserted when the pin tips end ``success_depth`` below the surface;
+straight down. It inserted when every pin ends ``success_depth`` deep in its own hole
+(:func:`~tolins.geometry.workspace.in_holes`, the envs' success);
 otherwise pin ``i`` was blocked when its touch sensor (``MujocoBackend.pin_forces()``)
 reads more than ``touch_force`` N, and its bearing is the angle of its touch point
 (``MujocoBackend.pin_touch_points()``) seen from its hole's centre. These are the evidence
@@ -15,6 +16,7 @@ import numpy as np
 
 from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import CircularSocket
+from tolins.geometry.workspace import in_holes
 from tolins.paper import A_MAX, CONTROL_DT
 
 
@@ -38,7 +40,7 @@ def physics_attempt(
         state = backend.step(push)
         if state.error:
             raise RuntimeError(f"physics attempt at {goal!r}: {state.error}")
-        if state.pose[3] <= -success_depth:
+        if in_holes(backend.spec, state.pose, success_depth):
             free = np.zeros(backend.spec.n_pins, dtype=bool)
             return True, free, np.full(backend.spec.n_pins, np.nan)
     blocked = backend.pin_forces() > touch_force

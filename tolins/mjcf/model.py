@@ -9,7 +9,10 @@ Elements (every one named):
   ``wall{k}``) around each hole and ``board_box{i}`` boxes elsewhere. Top at z = 0.
 * ``workpiece``: the carriage, on joints ``x``, ``y``, ``z`` (slides) and ``theta``
   (hinge about z), driven by ``intvelocity`` servos ``ux``, ``uy``, ``uz``,
-  ``utheta`` (control = velocity in mm/s or rad/s) with bounded force.
+  ``utheta`` (control = velocity in mm/s or rad/s) with bounded force. The joints'
+  ranges are the servo range of :mod:`tolins.geometry.workspace`, and the board covers
+  every place a pin can reach within it. Its ``carrier`` plate above the pins collides
+  with the board's top (at ``z = -PIN_LENGTH``, the lower end of the z range).
 * ``pins``: a joint-free child of the carriage holding the pin geoms ``pin{i}``
   (tips at z = 0 in the workpiece frame), the sites ``pin{i}_tip`` and the
   force/torque site ``ft_site`` read by the sensors ``force`` and ``torque``, and per
@@ -31,7 +34,8 @@ from tolins.geometry.specs import (
     inradius,
     polygon_vertices,
 )
-from tolins.mjcf.board import board_boxes, hole_wall_pieces
+from tolins.geometry.workspace import PIN_LENGTH, POSE_HIGH, POSE_LOW, reach
+from tolins.mjcf.board import BOARD_MARGIN, board_boxes, hole_wall_pieces
 from tolins.mjcf.xml import num, nums
 from tolins.paper import A_MAX
 
@@ -43,7 +47,8 @@ from tolins.paper import A_MAX
 #: with 1 ms (solref 0.002) 2 µm and 2 µm (see docs/environments.md).
 TIMESTEP = 0.001
 BOARD_THICKNESS = 3.0
-PIN_LENGTH = 4.0
+#: Board (mm) beyond the farthest place a pin can reach.
+BOARD_OVERHANG = 1.0
 #: Width (mm) of a hole cell's wall ring when no neighbour limits it.
 CELL_WALL = 1.0
 #: Servo force limits in model units: 5 N on x, y, z; 0.02 N·m about z.
@@ -71,6 +76,13 @@ def cell_half_width(spec: SocketSpec) -> float:
     if spec.cols > 1:
         limits.append(spec.col_pitch / 2)
     return min(limits)
+
+
+def board_margin(spec: SocketSpec) -> float:
+    """Board (mm) beyond the outermost hole cells: enough to hold every pin over the board
+    anywhere in the servo range."""
+    cells = np.max(np.abs(spec.hole_centers), axis=0) + cell_half_width(spec)
+    return max(BOARD_MARGIN, float(np.max(reach(spec) - cells)) + BOARD_OVERHANG)
 
 
 def hole_shape(spec: SocketSpec) -> tuple[int, float]:
@@ -106,7 +118,8 @@ def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
             f'pos="{nums((cx, cy, 0.0))}"/>'
             for k in range(sides)
         ]
-    for i, (center, half) in enumerate(board_boxes(spec.hole_centers, half_width)):
+    boxes = board_boxes(spec.hole_centers, half_width, board_margin(spec))
+    for i, (center, half) in enumerate(boxes):
         body.append(
             f'<geom name="board_box{i}" class="board" type="box" '
             f'pos="{nums((*center, -BOARD_THICKNESS / 2))}" '
@@ -159,15 +172,31 @@ def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
     return sites, sensors
 
 
-def _servo(
-    name: str, joint: str, kp: float, inertia: float, limit: float, speed: float, span: float
-) -> str:
-    """An integrated-velocity servo: control = velocity within ±speed, force within ±limit."""
+#: Joint name -> index in the pose ``[x, y, theta, z]``.
+_POSE_INDEX = {"x": 0, "y": 1, "theta": 2, "z": 3}
+
+
+def _range(joint: str) -> str:
+    """The joint's range: the servo range of :mod:`tolins.geometry.workspace`."""
+    i = _POSE_INDEX[joint]
+    return nums((POSE_LOW[i], POSE_HIGH[i]))
+
+
+def _joint(joint: str, kind: str, axis: str, armature: float) -> str:
+    return (
+        f'<joint name="{joint}" type="{kind}" axis="{axis}" armature="{num(armature)}" '
+        f'range="{_range(joint)}"/>'
+    )
+
+
+def _servo(name: str, joint: str, kp: float, inertia: float, limit: float, speed: float) -> str:
+    """An integrated-velocity servo: control = velocity within ±speed, force within ±limit,
+    set-point within the joint's range."""
     kv = 2 * math.sqrt(kp * inertia)
     return (
         f'<intvelocity name="{name}" joint="{joint}" kp="{num(kp)}" kv="{num(kv)}" '
         f'ctrlrange="{nums((-speed, speed))}" forcerange="{nums((-limit, limit))}" '
-        f'actrange="{nums((-span, span))}"/>'
+        f'actrange="{_range(joint)}"/>'
     )
 
 
@@ -178,7 +207,7 @@ def make_mjcf(spec: SocketSpec) -> str:
     board_assets, board_body = _board_xml(spec)
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
-    extent = float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + 10.0
+    extent = float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + board_margin(spec)
     carrier = carrier_half_size(spec)
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
@@ -211,13 +240,13 @@ def make_mjcf(spec: SocketSpec) -> str:
         'xyaxes="1 0 0 0 0.6 0.8"/>',
         *board_body,
         '<body name="workpiece">',
-        f'<joint name="x" type="slide" axis="1 0 0" armature="{num(SLIDE_ARMATURE)}"/>',
-        f'<joint name="y" type="slide" axis="0 1 0" armature="{num(SLIDE_ARMATURE)}"/>',
-        f'<joint name="z" type="slide" axis="0 0 1" armature="{num(SLIDE_ARMATURE)}"/>',
-        f'<joint name="theta" type="hinge" axis="0 0 1" armature="{num(HINGE_ARMATURE)}"/>',
+        _joint("x", "slide", "1 0 0", SLIDE_ARMATURE),
+        _joint("y", "slide", "0 1 0", SLIDE_ARMATURE),
+        _joint("z", "slide", "0 0 1", SLIDE_ARMATURE),
+        _joint("theta", "hinge", "0 0 1", HINGE_ARMATURE),
         f'<inertial pos="0 0 {num(PIN_LENGTH + 1)}" mass="0.1" diaginertia="10 10 10"/>',
         f'<geom name="carrier" type="box" pos="0 0 {num(PIN_LENGTH + 1)}" '
-        f'size="{nums((*carrier, 1))}" contype="0" conaffinity="0" '
+        f'size="{nums((*carrier, 1))}" contype="2" conaffinity="1" '
         'rgba="0.6 0.6 0.65 0.5"/>',
         '<body name="pins">',
         '<inertial pos="0 0 0" mass="0.001" diaginertia="0.001 0.001 0.001"/>',
@@ -228,10 +257,10 @@ def make_mjcf(spec: SocketSpec) -> str:
         "</body>",
         "</worldbody>",
         "<actuator>",
-        _servo("ux", "x", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[0], 1e3),
-        _servo("uy", "y", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[1], 1e3),
-        _servo("uz", "z", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[3], 1e3),
-        _servo("utheta", "theta", HINGE_KP, HINGE_ARMATURE, TORQUE_LIMIT, A_MAX[2], 10.0),
+        _servo("ux", "x", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[0]),
+        _servo("uy", "y", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[1]),
+        _servo("uz", "z", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[3]),
+        _servo("utheta", "theta", HINGE_KP, HINGE_ARMATURE, TORQUE_LIMIT, A_MAX[2]),
         "</actuator>",
         "<sensor>",
         '<force name="force" site="ft_site"/>',

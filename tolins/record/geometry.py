@@ -16,6 +16,7 @@ from tolins.mjcf.board import board_boxes, hole_wall_pieces
 from tolins.mjcf.model import (
     BOARD_THICKNESS,
     PIN_LENGTH,
+    board_margin,
     carrier_half_size,
     cell_half_width,
     hole_shape,
@@ -112,7 +113,7 @@ def board_geometry(spec: SocketSpec) -> BoardGeometry:
         walls += [prism_mesh(piece + center, -BOARD_THICKNESS, 0.0) for piece in pieces]
         ring = np.vstack([outline, outline[:1]]) + center
         holes.append(np.column_stack([ring, np.zeros(len(ring))]))
-    boxes = board_boxes(spec.hole_centers, half_width)
+    boxes = board_boxes(spec.hole_centers, half_width, board_margin(spec))
     box_set = BoxSet(
         np.array([[*c, -BOARD_THICKNESS / 2] for c, _ in boxes]),
         np.array([[*h, BOARD_THICKNESS / 2] for _, h in boxes]),

@@ -10,7 +10,7 @@ import pytest
 
 from tolins.bench.claims import CLAIMS, HELD, NOT_EVALUATED, NOT_HELD, check_claims
 from tolins.bench.config import BenchConfig
-from tolins.bench.results import row_entry
+from tolins.bench.results import read_results, row_entry
 from tolins.bench.runner import run_bench
 from tolins.bench.stages import MARKER, StageCache, stage_key
 from tolins.bench.table import PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
@@ -180,13 +180,17 @@ def test_a_stage_runs_once_and_an_interrupted_one_runs_again(tmp_path):
 
 
 def _check_outputs(out: Path, backend: str) -> dict:
-    results = json.loads((out / "results.json").read_text())
+    document = json.loads((out / "results.json").read_text())
+    assert document["schema"] == "tolins.results/1" and document["source"] == "bench"
+    assert document["backend"] == backend and document["profile"] == "tiny"
+    assert read_results(out) == document
+    results = document["rows"]
     assert list(results) == list(ROW_IDS)
     for entry in results.values():
         assert set(entry) >= SCHEMA
         assert entry["episodes"] == 2 and entry["seeds"] == 1
         assert all(np.isfinite(entry[k]) for k in SCHEMA if k.endswith(("_mean", "_std")))
-    assert json.loads((out / f"results.{backend}.json").read_text()) == results
+    assert json.loads((out / f"results.{backend}.json").read_text()) == document
     run = json.loads((out / "run.json").read_text())
     assert set(run["claims"]) == {c.name for c in CLAIMS}
     assert all(c["verdict"] in (HELD, NOT_HELD) for c in run["claims"].values())
@@ -211,10 +215,10 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
     assert len(again.cached) == 24  # 8 trainings, 15 evaluations, the study: none ran again
-    assert json.loads((tmp_path / "results.json").read_text()) == first
+    assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
-    results = json.loads((tmp_path / "results.json").read_text())
+    results = json.loads((tmp_path / "results.json").read_text())["rows"]
     assert list(results) == list(ROW_IDS)
     markdown = (tmp_path / "results.md").read_text()
     assert "## Backends side by side (mujoco vs kinematic)" in markdown

@@ -184,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_infer_study(commands)
     _add_train(commands)
     _add_bench(commands)
+    _add_evaluate(commands)
     return parser
 
 
@@ -191,6 +192,12 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     from tolins.bench.cli import add_bench_parser
 
     add_bench_parser(commands)
+
+
+def _add_evaluate(commands: argparse._SubParsersAction) -> None:
+    from tolins.bench.cli import add_evaluate_parser
+
+    add_evaluate_parser(commands)
 
 
 def _add_train(commands: argparse._SubParsersAction) -> None:

@@ -58,3 +58,61 @@ def _run(args: argparse.Namespace) -> int:
     print(format_claims(run.claims))
     print(f"\n{run.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json and plots")
     return 0
+
+
+def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
+    """Add ``evaluate`` to the ``tolins`` parser."""
+    from tolins.learning.actors import ALLOWED
+
+    evaluate = commands.add_parser(
+        "evaluate",
+        help="score any policy on the bench's evaluation protocol, beside the reference rows",
+        description="Evaluate a policy like a row of `tolins bench` (same evaluation seeds, "
+        "sparse reward, summary and results.json schema) and print it beside the rows of "
+        f"the same eval env. --policy: {ALLOWED}.",
+    )
+    evaluate.add_argument("--policy", required=True, help="MODULE:NAME, PATH, PATH.zip or expert")
+    evaluate.add_argument("--env", required=True, help="eval env id, e.g. tolins/Circle2x2-v1")
+    evaluate.add_argument("--episodes", type=int, default=100, help="evaluation episodes")
+    evaluate.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
+    evaluate.add_argument("--name", help="the row's label (default: --policy)")
+    evaluate.add_argument("--out", help="write DIR/results.json (the bench's schema)")
+    evaluate.add_argument(
+        "--reference",
+        metavar="DIR",
+        help="a `tolins bench` results folder whose rows to show (default: the paper's)",
+    )
+    evaluate.set_defaults(run=_evaluate)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from tolins.bench.scoring import (
+        evaluate_policy,
+        format_rows,
+        reference_rows,
+        write_evaluation,
+    )
+
+    name = args.name or args.policy
+    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
+        print(f"tolins evaluate: --out {args.out}: is a file; allowed: a folder", file=sys.stderr)
+        return 2
+    try:
+        source, rows = reference_rows(args.env, args.reference)
+        entry = evaluate_policy(
+            args.policy, args.env, episodes=args.episodes, backend=args.backend, name=name
+        )
+    except (ValueError, FileNotFoundError) as error:
+        print(f"tolins evaluate: {error}", file=sys.stderr)
+        return 2
+    print(format_rows({name: entry}))
+    if rows:
+        print(f"\nreference rows on {args.env}, from {source}:")
+        print(format_rows(rows))
+    print(
+        f"\n{entry['episodes']} episodes (seeds 10000…), {args.backend} backend, "
+        f"{entry['faults']} simulator faults"
+    )
+    if args.out:
+        print(f"wrote {write_evaluation(args.out, name, entry, backend=args.backend)}")
+    return 0

@@ -9,7 +9,7 @@ import gymnasium as gym
 
 from tolins.bench.table import Row
 from tolins.learning.actors import make_actor
-from tolins.rollout import Episode, run_episode
+from tolins.rollout import Episode, Policy, run_episode
 
 #: Evaluation seeds start here (no training run uses them); seed index ``s`` of the
 #: training gets ``FIRST_SEED + 1000 s, ...``.
@@ -46,7 +46,7 @@ def evaluate_row(
 
 
 def evaluate(
-    entry: str,
+    entry: str | Policy,
     env_id: str,
     backend: str,
     seeds: list[int],
@@ -56,16 +56,17 @@ def evaluate(
     recorded: int = 0,
     policy_name: str | None = None,
 ) -> list[Episode]:
-    """Run the policy ``entry`` (:func:`tolins.learning.actors.make_actor`) on ``env_id``
-    from each seed; the first ``recorded`` episodes go through
-    :class:`tolins.record.RerunRecorder` into ``record`` (an ``.rrd``).
+    """Run the policy ``entry`` (a name for :func:`tolins.learning.actors.make_actor`, or
+    an actor ``observation -> action``) on ``env_id`` from each seed; the first
+    ``recorded`` episodes go through :class:`tolins.record.RerunRecorder` into ``record``
+    (an ``.rrd``).
 
     ``inference=True`` wraps the policy in
     :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary outcomes (the
     paper's π_φ*), reset before every episode.
     """
     env = gym.make(env_id, backend=backend)
-    actor = make_actor(entry, env.unwrapped.nominal_socket)
+    actor = make_actor(entry, env.unwrapped.nominal_socket) if isinstance(entry, str) else entry
     wrapper = None
     if inference:
         from tolins.inference.adaptive import InferenceGuidedPolicy
@@ -75,7 +76,8 @@ def evaluate(
     if record is not None and recorded > 0:
         from tolins.record import RerunRecorder
 
-        recorder = RerunRecorder(env, record, policy_name=policy_name or entry.split("=")[0])
+        name = policy_name or (entry.split("=")[0] if isinstance(entry, str) else "policy")
+        recorder = RerunRecorder(env, record, policy_name=name)
     episodes = []
     try:
         for i, seed in enumerate(seeds):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import csv
 import datetime
-import json
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from tolins.bench import plots
 from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
 from tolins.bench.evaluation import FIRST_SEED
+from tolins.bench.results import read_results, results_document
 from tolins.bench.table import PAPER, ROWS, TRAININGS
 from tolins.bench.training import Trainer
 from tolins.envs.tasks import TASKS
@@ -28,9 +28,12 @@ def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
     """Write every output of ``run`` into ``run.config.out``; the paths written."""
     out = Path(run.config.out)
     backend = run.config.backend
+    document = results_document(
+        run.results, source="bench", backend=backend, profile=run.config.profile
+    )
     written = [
-        atomic_json(out / "results.json", run.results),
-        atomic_json(out / f"results.{backend}.json", run.results),
+        atomic_json(out / "results.json", document),
+        atomic_json(out / f"results.{backend}.json", document),
     ]
     if run.study is not None:
         written.append(atomic_json(out / "inference.json", run.study))
@@ -63,7 +66,7 @@ def _recordings(run: BenchRun, out: Path) -> list[Path]:
 def _other_backend(out: Path, backend: str) -> tuple[str, dict[str, Any]] | None:
     other = next(b for b in BACKENDS if b != backend)
     path = out / f"results.{other}.json"
-    return (other, json.loads(path.read_text())) if path.is_file() else None
+    return (other, read_results(path)["rows"]) if path.is_file() else None
 
 
 def _run_record(run: BenchRun, seeds: int) -> dict[str, Any]:

@@ -1,15 +1,24 @@
-"""Table 1's figures of a row from its episodes (``results.json``'s entries)."""
+"""Table 1's figures of a row from its episodes (``results.json``'s entries), and the
+versioned ``results.json`` document (:data:`SCHEMA`) that holds them."""
 
 from __future__ import annotations
 
+import datetime
+import json
+import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from tolins.bench.evaluation import FIRST_SEED
+from tolins.bench.statistics import row_intervals
 from tolins.bench.table import Row
 from tolins.rollout import Episode
 
 FIGURES = ("reward", "success", "steps", "collisions")
+#: The version of ``results.json``'s layout, its ``schema`` field.
+SCHEMA = "tolins.results/1"
 
 
 def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
@@ -17,7 +26,9 @@ def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
 
     ``*_mean`` is over every episode. ``*_std`` follows the paper (± over runs): the std
     of the per-seed means when there are several seeds, else the std over episodes
-    (``std_over`` says which).
+    (``std_over`` says which). ``*_per_seed`` are the per-seed means,
+    ``reward_per_episode`` every episode's reward (one list per seed), and the interval
+    keys of :func:`tolins.bench.statistics.row_intervals` (``*_ci``, ``reward_iqm``...).
     """
     if not per_seed or not all(per_seed):
         raise ValueError(f"row {row.id}: no episodes; allowed: ≥ 1 episode per seed")
@@ -42,7 +53,58 @@ def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
     entry["seeds"] = len(per_seed)
     entry["std_over"] = "seeds" if over_seeds else "episodes"
     entry["faults"] = int(sum(e.error is not None for seed in per_seed for e in seed))
+    for name in FIGURES:
+        entry[f"{name}_per_seed"] = [float(np.mean(v)) for v in values[name]]
+    entry["reward_per_episode"] = [[float(r) for r in seed] for seed in values["reward"]]
+    entry.update(row_intervals(values))
     return entry
+
+
+def results_document(
+    rows: dict[str, dict[str, Any]], *, source: str, backend: str, profile: str | None
+) -> dict[str, Any]:
+    """The ``results.json`` of ``rows`` (entries of :func:`row_entry`) in the schema
+    :data:`SCHEMA` (every field: docs/benchmark.md)."""
+    import tolins
+
+    return {
+        "schema": SCHEMA,
+        "source": source,
+        "tolins_version": tolins.__version__,
+        "date": datetime.date.today().isoformat(),
+        "backend": backend,
+        "profile": profile,
+        "first_eval_seed": FIRST_SEED,
+        "rows": rows,
+    }
+
+
+def read_results(path: str | os.PathLike) -> dict[str, Any]:
+    """The ``results.json`` document at ``path`` (a file, or a folder holding one).
+
+    A file of tolins ≤ 0.2 (row entries at the top, no ``schema``) is read as the rows of
+    a document whose other fields are ``None``. Raises ``ValueError`` for anything else.
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / "results.json"
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file; allowed: a results.json or its folder")
+    try:
+        document = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{path}: not JSON ({error})") from error
+    if not isinstance(document, dict):
+        raise ValueError(f"{path}: not a results document; allowed: schema {SCHEMA!r}")
+    if "schema" not in document and all(
+        isinstance(v, dict) and "reward_mean" in v for v in document.values()
+    ):
+        fields = ("source", "tolins_version", "date", "backend", "profile", "first_eval_seed")
+        return {"schema": None, **dict.fromkeys(fields), "rows": document}
+    if document.get("schema") != SCHEMA or not isinstance(document.get("rows"), dict):
+        found = document.get("schema")
+        raise ValueError(f"{path}: schema {found!r}; allowed: {SCHEMA!r}")
+    return document
 
 
 def standard_error(entry: dict[str, Any], figure: str = "reward") -> float:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
@@ -10,17 +11,44 @@ from tolins.geometry.specs import SocketSpec
 from tolins.learning.policy import load_policy
 from tolins.policies import EXPERTS
 
+#: What :func:`make_actor` accepts, for error messages and help texts.
+ALLOWED = (
+    "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes), "
+    "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act)"
+)
+
 
 def make_actor(entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndarray]:
-    """An expert by name (``safe``, ``efficient``) or ``NAME=PATH`` of a policy saved by
-    ``tolins train``; a tolerance-guided policy gets the embedding of ``socket``."""
-    if "=" not in entry:
-        if entry not in EXPERTS:
-            raise ValueError(
-                f"policy {entry!r} is unknown; allowed: {sorted(EXPERTS)} or NAME=PATH"
-            )
+    """The policy ``entry``: an expert by name (``safe``, ``efficient``); a policy file
+    saved by ``tolins train`` (``PATH`` or ``NAME=PATH``; a tolerance-guided policy gets
+    the embedding of ``socket``); a stable-baselines3 model (``PATH.zip``,
+    :func:`tolins.learning.external.load_sb3`); or ``MODULE:NAME``
+    (:func:`tolins.learning.external.import_policy`).
+
+    Raises ``ValueError`` (one line: what was wrong, what is allowed).
+    """
+    if entry in EXPERTS:
         return EXPERTS[entry]()
-    policy, _ = load_policy(entry.split("=", 1)[1])
+    name, sep, rest = entry.partition("=")
+    path = Path(rest if sep and name.isidentifier() else entry)
+    if path.suffix == ".zip" or path.is_file():
+        if not path.is_file():
+            raise ValueError(f"policy {entry!r}: no such file {str(path)!r}")
+        if path.suffix == ".zip":
+            from tolins.learning.external import load_sb3
+
+            return load_sb3(path)
+        return _policy_file(path, socket)
+    if ":" in entry and not sep:
+        from tolins.learning.external import import_policy
+
+        return import_policy(entry)
+    missing = f"no such file {str(path)!r}" if path.suffix or "/" in entry else "unknown"
+    raise ValueError(f"policy {entry!r}: {missing}; allowed: {ALLOWED}")
+
+
+def _policy_file(path: Path, socket: SocketSpec) -> Callable[[np.ndarray], np.ndarray]:
+    policy, _ = load_policy(path)
     if policy.architecture.kind != "tolerance_guided":
         return policy.bind()
     from tolins.embedding import encode  # the embedding imports learning: import on use

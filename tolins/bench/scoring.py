@@ -1,0 +1,104 @@
+"""Score any policy on the bench's protocol (``tolins evaluate``, :func:`evaluate_policy`).
+
+Same evaluation as every Table 1 row (:mod:`.evaluation`): the sparse reward of the
+paper, episodes from the seeds of training seed 0 (``10000, 10001, ...``), the same
+summary (:func:`tolins.bench.results.row_entry`) and the same ``results.json`` schema.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from tolins.atomic import atomic_json
+from tolins.bench.config import BACKENDS
+from tolins.bench.evaluation import eval_seeds, evaluate
+from tolins.bench.results import read_results, results_document, row_entry
+from tolins.bench.table import PAPER, ROWS, Row
+from tolins.envs.tasks import TASKS
+
+#: Episodes of a row in every bench profile but ``tiny``.
+EPISODES = 100
+
+
+def evaluate_policy(
+    policy: Any,
+    env_id: str,
+    *,
+    episodes: int = EPISODES,
+    backend: str = "mujoco",
+    name: str | None = None,
+) -> dict[str, Any]:
+    """The ``results.json`` entry of ``policy`` on ``env_id``, evaluated like a bench row.
+
+    ``policy``: a string as ``tolins evaluate --policy`` takes it (an expert name, a tolins
+    policy file, an SB3 ``PATH.zip``, ``MODULE:NAME``; :func:`tolins.learning.actors.make_actor`)
+    or a Python object following :mod:`tolins.learning.external`'s protocol (a callable
+    ``observation -> action``, or an object with ``predict``/``act``). ``name`` labels the
+    row (default: the string, or the object's type).
+
+    Raises ``ValueError`` for an unknown env id or backend, a bad episode count or a
+    policy that cannot be loaded or returns a malformed action.
+    """
+    allowed = [task.gym_id for task in TASKS]
+    if env_id not in allowed:
+        raise ValueError(f"env {env_id!r} is unknown; allowed: {', '.join(allowed)}")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    if not isinstance(episodes, int) or isinstance(episodes, bool) or episodes < 1:
+        raise ValueError(f"episodes={episodes!r}; allowed: an integer ≥ 1")
+    if isinstance(policy, str):
+        entry: Any = policy
+        label = name or policy
+    else:
+        from tolins.learning.external import as_actor
+
+        label = name or type(policy).__name__
+        entry = as_actor(policy, name=label)
+    row = Row(label, label, "user", env_id, "-")
+    episodes_run = evaluate(entry, env_id, backend, eval_seeds(0, episodes), policy_name=label)
+    return row_entry(row, [episodes_run])
+
+
+def write_evaluation(out: str | Path, name: str, entry: dict[str, Any], *, backend: str) -> Path:
+    """``out/results.json`` holding the one row ``name`` (schema of the bench's)."""
+    document = results_document({name: entry}, source="evaluate", backend=backend, profile=None)
+    return atomic_json(Path(out) / "results.json", document)
+
+
+def reference_rows(
+    env_id: str, reference: str | Path | None = None
+) -> tuple[str, dict[str, dict[str, Any]]]:
+    """Rows evaluated on ``env_id`` to show beside a scored policy, and where they are from:
+    those of the results folder (or file) ``reference``, else the paper's Table 1."""
+    if reference is not None:
+        document = read_results(reference)
+        rows = {k: v for k, v in document["rows"].items() if v.get("eval_env") == env_id}
+        source = f"{reference} ({document.get('backend') or 'unknown backend'})"
+        return source, rows
+    rows = {}
+    for row in ROWS:
+        if row.eval_env == env_id:
+            figures = PAPER[row.id]
+            rows[row.id] = {
+                "policy": row.policy,
+                "train_env": row.train_env,
+                "eval_env": row.eval_env,
+                **{f"{k}_mean": mean for k, (mean, _) in figures.items()},
+                **{f"{k}_std": std for k, (_, std) in figures.items()},
+            }
+    return "the paper's Table 1 (its simulator)", rows
+
+
+def format_rows(rows: dict[str, dict[str, Any]]) -> str:
+    """Rows as a Markdown table: mean ± std of reward, success rate, steps, collisions."""
+    lines = [
+        "| ID | policy | eval env | reward | success rate | steps | collisions |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for row_id, entry in rows.items():
+        cells = [row_id, entry["policy"], entry["eval_env"].removeprefix("tolins/")]
+        for figure in ("reward", "success", "steps", "collisions"):
+            cells.append(f"{entry[f'{figure}_mean']:.2f} ± {entry[f'{figure}_std']:.2f}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)

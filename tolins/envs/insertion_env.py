@@ -91,8 +91,9 @@ class InsertionEnv(gym.Env):
       ``reward_approach = -min(d / 5 mm, 1)`` (``d``: mean horizontal distance of the pins
       to their holes; a polygon peg's vertices, theta modulo its symmetry);
       ``reward_height = -clip(z, 0, 20 mm) / 20 mm`` (pin tips over the board's top);
-      ``reward_alignment = -0.5`` unless ``[x, y, theta]`` puts every pin over its own
-      hole (inside the tolerance); ``reward_depth = -0.5 (1 - aligned · clip(-z, 0,
+      ``reward_alignment = -0.5 min(u, 1)``, ``u`` the share of the clearance used (0
+      centred, 1 on the tolerance's boundary: -0.5 unless every pin is over its own
+      hole); ``reward_depth = -0.5 (1 - aligned · clip(-z, 0,
       success_depth) / success_depth)`` (insertion depth, counted only while aligned).
     * ``"normalized_dense"``: the dense reward mapped affinely onto [0, 1]:
       ``(r - lo) / (hi - lo)``, ``lo = -3 - 1``, ``hi = c``; each term is scaled and

@@ -246,3 +246,41 @@ def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
     assert {"bc_safe-seed0", "pi_n_safe-seed0", "pi_n_efficient-seed0"} <= set(resumed.cached)
     assert "pi_phi_circle-seed0" not in resumed.cached
     assert resumed.results == whole.results
+
+
+@pytest.mark.slow
+def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path, monkeypatch):
+    """Interrupted after π_n's RS-GAIL checkpoint (before its stage finished), moved, resumed;
+    moved again, every stage cached; the figures are those of an uninterrupted run."""
+    from tolins.learning import runs
+
+    def config(folder: str) -> BenchConfig:
+        out = str(tmp_path / folder)
+        return BenchConfig(profile="tiny", backend="kinematic", rows="C2.2,C2.3", out=out)
+
+    def quiet(config: BenchConfig):
+        return run_bench(config, progress=False, log=lambda _: None)
+
+    whole = quiet(config("whole"))
+    finish = runs._finish
+    with monkeypatch.context() as patch:
+        patch.setattr(runs, "_finish", lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
+        with pytest.raises(KeyboardInterrupt):
+            quiet(config("a"))
+    assert runs._finish is finish
+    (checkpoint,) = (tmp_path / "a" / "stages").glob("pi_n_safe-seed0-*/checkpoint.pt")
+    assert not (checkpoint.parent / MARKER).exists()  # the stage was left half-way
+
+    (tmp_path / "a").rename(tmp_path / "b")
+    resumed = quiet(config("b"))
+    assert resumed.cached == ["bc_safe-seed0"]  # π_n resumed from its checkpoint
+    assert resumed.results == whole.results
+
+    (tmp_path / "b").rename(tmp_path / "c")
+    again = quiet(config("c"))
+    assert sorted(again.cached) == sorted(again.stage_wall_s)  # every stage, none re-run
+    assert len(again.cached) == 5  # bc, π_n, two evaluations, the study
+    assert again.results == whole.results
+    assert again.study == whole.study
+    for name in ("results.json", "inference.json"):
+        assert (tmp_path / "c" / name).read_text() == (tmp_path / "whole" / name).read_text()

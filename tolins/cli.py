@@ -6,6 +6,9 @@ import argparse
 import sys
 import time
 
+from tolins import cli_checks
+from tolins.cli_checks import positive_int, seed
+
 
 def _demo(args: argparse.Namespace) -> int:
     from tolins.demo import format_table, run_demo
@@ -21,25 +24,13 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _record(args: argparse.Namespace) -> int:
+    cli_checks.output_file("--out", args.out, suffixes=(".rrd",))
     import gymnasium as gym
     from tqdm import tqdm
 
-    import tolins  # noqa: F401  (registers the env ids)
     from tolins.policies.experts import EXPERTS
     from tolins.record import record_episodes
-    from tolins.record.recorder import check_output_path
 
-    if args.env not in gym.registry:
-        ids = sorted(i for i in gym.registry if i.startswith("tolins/"))
-        print(
-            f"tolins record: unknown --env {args.env!r}; allowed: {', '.join(ids)}", file=sys.stderr
-        )
-        return 2
-    try:
-        check_output_path(args.out)
-    except ValueError as error:
-        print(f"tolins record: {error}", file=sys.stderr)
-        return 2
     env = gym.make(args.env)
     try:
         with tqdm(total=args.episodes, desc=f"recording {args.env}", unit="episode") as bar:
@@ -63,6 +54,12 @@ def _record(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace) -> int:
+    if args.web and args.port == args.grpc_port:
+        raise cli_checks.OptionError(
+            f"--port {args.port} is also --grpc-port; allowed: two different ports"
+        )
+    if args.screenshot is not None:
+        cli_checks.output_file("--screenshot", args.screenshot, suffixes=(".png",))
     from tolins.record import RrdError, replay
 
     try:
@@ -79,20 +76,21 @@ def _replay(args: argparse.Namespace) -> int:
 
 
 def _embed_train(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from tolins.config_args import config_from_args
-    from tolins.learning.checkpoint import save_checkpoint
     from tolins.learning.embedding_config import EmbeddingTrainConfig
-    from tolins.learning.embedding_eval import held_out_specs, measure
-    from tolins.learning.embedding_train import train_embedding
 
     try:
         config = config_from_args(EmbeddingTrainConfig, args)
     except ValueError as error:
         print(f"tolins embed train: {error}", file=sys.stderr)
         return 2
-    out = args.out or f"runs/embedding_{config.family}.pt"
+    out = cli_checks.output_file("--out", args.out or f"runs/embedding_{config.family}.pt")
+    from tqdm import tqdm
+
+    from tolins.learning.checkpoint import save_checkpoint
+    from tolins.learning.embedding_eval import held_out_specs, measure
+    from tolins.learning.embedding_train import train_embedding
+
     start = time.perf_counter()
     with tqdm(total=config.epochs, desc=f"training {config.family} embedding", unit="epoch") as bar:
 
@@ -113,6 +111,10 @@ def _embed_train(args: argparse.Namespace) -> int:
 
 
 def _infer_study(args: argparse.Namespace) -> int:
+    if args.json:
+        cli_checks.output_file("--json", args.json)
+    if args.plot:
+        cli_checks.output_file("--plot", args.plot, suffixes=(".png",))
     from tqdm import tqdm
 
     from tolins.inference.report import format_table, save_plot, write_json
@@ -143,41 +145,44 @@ def _infer_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed; allowed: an integer ≥ 1")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="tolins", description=__doc__)
+    parser = cli_checks.Parser(prog="tolins", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
         "demo", help="roll out both experts in every preset environment and print a table"
     )
-    demo.add_argument("--episodes", type=_positive_int, default=100, help="episodes per row")
-    demo.add_argument("--seed", type=int, default=0, help="seed of the first episode")
-    demo.add_argument("--workers", type=_positive_int, default=2, help="threads")
+    demo.add_argument("--episodes", type=positive_int, default=100, help="episodes per row")
+    demo.add_argument("--seed", type=seed, default=0, help="seed of the first episode")
+    demo.add_argument("--workers", type=positive_int, default=2, help="threads")
     demo.add_argument(
         "--backend", default="mujoco", choices=["mujoco", "kinematic"], help="simulator"
     )
     demo.set_defaults(run=_demo)
     record = commands.add_parser("record", help="record expert episodes to a rerun .rrd file")
-    record.add_argument("--env", required=True, help="env id, e.g. tolins/Circle2x2-v1")
+    record.add_argument(
+        "--env",
+        required=True,
+        type=cli_checks.preset_env_ids(),
+        help="a preset env id, e.g. tolins/Circle2x2-v1",
+    )
     record.add_argument("--policy", default="safe", choices=["safe", "efficient"], help="expert")
-    record.add_argument("--episodes", type=_positive_int, default=5, help="episodes")
-    record.add_argument("--out", required=True, help="output file, FILE.rrd")
-    record.add_argument("--seed", type=int, default=0, help="seed of the first episode")
+    record.add_argument("--episodes", type=positive_int, default=5, help="episodes")
+    record.add_argument("--out", required=True, help="output file, FILE.rrd (replaced if present)")
+    record.add_argument("--seed", type=seed, default=0, help="seed of the first episode")
     record.set_defaults(run=_record)
     replay = commands.add_parser("replay", help="show a .rrd recording in the rerun viewer")
     replay.add_argument("file", help="a .rrd file written by `tolins record`")
     mode = replay.add_mutually_exclusive_group()
     mode.add_argument("--web", action="store_true", help="serve the web viewer on 127.0.0.1")
     mode.add_argument("--screenshot", metavar="OUT.png", help="render headless to a PNG")
-    replay.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
     replay.add_argument(
-        "--grpc-port", type=int, default=9876, help="port serving the recording (with --web)"
+        "--port", type=cli_checks.port, default=9090, help="web viewer port (with --web)"
+    )
+    replay.add_argument(
+        "--grpc-port",
+        type=cli_checks.port,
+        default=9876,
+        help="port serving the recording (with --web)",
     )
     replay.set_defaults(run=_replay)
     _add_embed(commands)
@@ -214,9 +219,11 @@ def _add_embed(commands: argparse._SubParsersAction) -> None:
     actions = embed.add_subparsers(dest="action", required=True)
     train = actions.add_parser("train", help="train the autoencoder of one workpiece family")
     add_config_arguments(train, EmbeddingTrainConfig)
-    train.add_argument("--out", help="checkpoint file (default: runs/embedding_FAMILY.pt)")
     train.add_argument(
-        "--held-out", type=_positive_int, default=200, help="held-out workpieces to score"
+        "--out", help="checkpoint file, replaced if present (default: runs/embedding_FAMILY.pt)"
+    )
+    train.add_argument(
+        "--held-out", type=positive_int, default=200, help="held-out workpieces to score"
     )
     train.set_defaults(run=_embed_train)
 
@@ -225,12 +232,12 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
     study = commands.add_parser(
         "infer-study", help="the paper's probabilistic-inference study (2*1, bent pins)"
     )
-    study.add_argument("--samples", type=_positive_int, default=500, help="workpieces")
-    study.add_argument("--seed", type=int, default=0, help="seed of defects and methods")
+    study.add_argument("--samples", type=positive_int, default=500, help="workpieces")
+    study.add_argument("--seed", type=seed, default=0, help="seed of defects and methods")
     study.add_argument(
-        "--particles", type=_positive_int, default=1000, help="posterior samples per query"
+        "--particles", type=positive_int, default=1000, help="posterior samples per query"
     )
-    study.add_argument("--workers", type=_positive_int, default=2, help="processes")
+    study.add_argument("--workers", type=positive_int, default=2, help="processes")
     study.add_argument(
         "--methods",
         help="comma-separated subset of inference, inference_blocked, inference_contact, "
@@ -247,14 +254,29 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
         action="store_true",
         help="outcomes, blocked pins and touch bearings from MuJoCo contact physics",
     )
-    study.add_argument("--json", metavar="OUT.json", help="write the figures as JSON")
-    study.add_argument("--plot", metavar="OUT.png", help="save the cumulative-success plot")
+    study.add_argument(
+        "--json", metavar="OUT.json", help="write the figures as JSON (replaced if present)"
+    )
+    study.add_argument(
+        "--plot", metavar="OUT.png", help="save the cumulative-success plot (replaced if present)"
+    )
     study.set_defaults(run=_infer_study)
 
 
+def _prog(args: argparse.Namespace) -> str:
+    words = [args.command, getattr(args, "action", None), getattr(args, "method", None)]
+    return " ".join(["tolins", *(word for word in words if word)])
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    return args.run(args)
+    try:
+        args = build_parser().parse_args(argv)
+    except cli_checks.UsageError as error:
+        return cli_checks.fail(error.prog, error)
+    try:
+        return args.run(args)
+    except cli_checks.OptionError as error:
+        return cli_checks.fail(_prog(args), error)
 
 
 if __name__ == "__main__":

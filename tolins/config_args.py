@@ -2,7 +2,8 @@
 
 Each field becomes ``--field-name`` with the field's default, its type (``int``,
 ``float``, ``str``, ``bool`` as ``--x/--no-x``, ``Literal[...]`` as choices, ``X | None``)
-and, as help, the docstring written under the field::
+and, as help, the docstring written under the field. A field named ``seed`` takes
+:func:`tolins.cli_checks.seed` (0 … 2**32 - 1), like every seed option of ``tolins``::
 
     @dataclass(frozen=True)
     class TrainConfig:
@@ -24,6 +25,8 @@ import textwrap
 import types
 import typing
 from typing import Any, TypeVar
+
+from tolins.cli_checks import seed
 
 Config = TypeVar("Config")
 
@@ -62,6 +65,8 @@ def add_config_arguments(parser: argparse.ArgumentParser, cls: type) -> None:
         elif typing.get_origin(kind) is typing.Literal:
             choices = typing.get_args(kind)
             kwargs.update(choices=choices, type=type(choices[0]))
+        elif field.name == "seed" and kind is int and not optional:
+            kwargs["type"] = seed
         elif kind in (int, float, str):
             kwargs["type"] = _none_or(kind) if optional else kind
         else:

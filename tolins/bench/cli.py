@@ -8,6 +8,7 @@ from pathlib import Path
 
 from tolins.bench.config import BACKENDS, BenchConfig
 from tolins.bench.profiles import PROFILES
+from tolins.cli_checks import fail, output_folder, positive_int
 
 
 def add_bench_parser(commands: argparse._SubParsersAction) -> None:
@@ -28,27 +29,31 @@ def add_bench_parser(commands: argparse._SubParsersAction) -> None:
     )
     bench.add_argument("--rows", help="comma-separated row ids, e.g. C2.1,C2.3 (default: all)")
     bench.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
-    bench.add_argument("--seeds", type=int, help="training seeds (default: the profile's)")
+    bench.add_argument("--seeds", type=positive_int, help="training seeds (default: the profile's)")
     bench.add_argument("--out", help="output folder (default: results/PROFILE)")
-    bench.add_argument("--workers", type=int, default=2, help="evaluation threads")
+    bench.add_argument("--workers", type=positive_int, default=2, help="evaluation threads")
     bench.add_argument("--no-study", action="store_true", help="skip the inference study")
     bench.set_defaults(run=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tolins.bench.report import format_claims, format_results_table
-    from tolins.bench.runner import run_bench
-
     try:
+        out = output_folder("--out", args.out or Path("results") / args.profile)
         config = BenchConfig(
             profile=args.profile,
             rows=args.rows,
             backend=args.backend,
             seeds=args.seeds,
-            out=args.out or str(Path("results") / args.profile),
+            out=str(out),
             study=not args.no_study,
             workers=args.workers,
         )
+    except ValueError as error:  # OptionError too
+        return fail("tolins bench", error)
+    from tolins.bench.report import format_claims, format_results_table
+    from tolins.bench.runner import run_bench
+
+    try:
         run = run_bench(config)
     except (ValueError, FileNotFoundError) as error:
         print(f"tolins bench: {error}", file=sys.stderr)

@@ -98,7 +98,7 @@ class Trainer:
                 self.profile.bc(),
                 self.profile.rs_gail(training.method),
                 out,
-                init=str(upstream.resolve()),
+                init=str(upstream),
                 resume=True,
                 progress=self.progress,
             )
@@ -109,7 +109,7 @@ class Trainer:
                 self.profile.rs_gail(training.method),
                 self.profile.residual(),
                 out,
-                nominal=str(upstream.resolve()),
+                nominal=str(upstream),
                 resume=True,
                 progress=self.progress,
             )

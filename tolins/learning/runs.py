@@ -7,6 +7,7 @@ seed and ``tolins.__version__`` (:func:`tolins.learning.artefacts.run_metadata`)
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -66,11 +67,12 @@ def run_rs_gail(
 ) -> RSGailResult:
     """π_n: RS-GAIL from the BC policy ``init`` (or one cloned here with ``bc``)."""
     out = Path(out)
-    metadata = run_metadata(task.seed, env=env_id, init=init, task=task, bc=bc, rs_gail=rs_gail)
-    expert = demonstrations([env_id], task)
+    start = None if init is None else _relative(init, out)
+    metadata = run_metadata(task.seed, env=env_id, init=start, task=task, bc=bc, rs_gail=rs_gail)
     if init is not None:
         policy, _ = load_policy(init, kind="nominal")
-    else:
+    expert = demonstrations([env_id], task)
+    if init is None:
         policy = behaviour_clone(expert, bc, seed=task.seed).policy
     result = train_rs_gail(
         policy,
@@ -104,7 +106,7 @@ def run_tolerance_guided(
     metadata = run_metadata(
         task.seed,
         env=",".join(env_ids),
-        nominal=nominal,
+        nominal=_relative(nominal, out),
         task=task,
         rs_gail=rs_gail,
         residual=residual,
@@ -125,6 +127,12 @@ def run_tolerance_guided(
     )
     _finish(out, result, metadata, f"tolerance-guided on {', '.join(env_ids)}")
     return result
+
+
+def _relative(path: str | Path, out: Path) -> str:
+    """``path`` relative to the run folder ``out``: what the metadata records, so that a
+    run folder moved together with its inputs (a bench's stages) still resumes."""
+    return os.path.relpath(Path(path).resolve(), out.resolve())
 
 
 def _finish(out: Path, result: RSGailResult, metadata: dict[str, Any], title: str) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from tolins import cli_checks
 from tolins.config_args import add_config_arguments, config_from_args
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
 
@@ -13,6 +14,8 @@ _CONFIGS = {
     "rs-gail": (TaskConfig, BCConfig, RSGailConfig),
     "tolerance-guided": (TaskConfig, RSGailConfig, ResidualConfig),
 }
+#: ``tolins.learning.rs_gail.CHECKPOINT``, named here without importing torch (tested).
+CHECKPOINT = "checkpoint.pt"
 _HELP = {
     "bc": "behaviour cloning of a scripted expert",
     "rs-gail": "the nominal policy π_n by RS-GAIL (CMA-ES) from a BC policy",
@@ -26,9 +29,18 @@ def add_train_parser(commands: argparse._SubParsersAction) -> None:
     methods = train.add_subparsers(dest="method", required=True)
     for method, configs in _CONFIGS.items():
         parser = methods.add_parser(method, help=_HELP[method])
-        env_help = "env ids, comma-separated" if method == "tolerance-guided" else "env id"
-        parser.add_argument("--env", required=True, help=f"{env_help}, e.g. tolins/Circle2x2-v1")
-        parser.add_argument("--out", required=True, help="output folder")
+        several = method == "tolerance-guided"
+        env_help = "preset env ids, comma-separated" if several else "a preset env id"
+        parser.add_argument(
+            "--env",
+            required=True,
+            type=cli_checks.preset_env_ids(several=several),
+            help=f"{env_help}, e.g. tolins/Circle2x2-v1",
+        )
+        out_help = "output folder (its files are replaced)"
+        if method != "bc":
+            out_help = "output folder (a new run, or --resume to continue its checkpoint)"
+        parser.add_argument("--out", required=True, help=out_help)
         for config in configs:
             add_config_arguments(parser, config)
         if method == "rs-gail":
@@ -40,11 +52,29 @@ def add_train_parser(commands: argparse._SubParsersAction) -> None:
         parser.set_defaults(run=_run)
 
 
+def _check_paths(args: argparse.Namespace) -> None:
+    """Raise :class:`~tolins.cli_checks.OptionError` for a bad --out, --init or --nominal."""
+    out = cli_checks.output_folder("--out", args.out)
+    for option in ("init", "nominal"):
+        if getattr(args, option, None) is not None:
+            cli_checks.input_file(f"--{option}", getattr(args, option))
+    if args.method != "bc" and not args.resume and (out / CHECKPOINT).exists():
+        raise cli_checks.OptionError(
+            f"--out {out}: holds {CHECKPOINT} of an earlier run; allowed: --resume to "
+            "continue it, or a folder without one"
+        )
+
+
 def _run(args: argparse.Namespace) -> int:
+    prog = f"tolins train {args.method}"
+    try:
+        configs = {cls.__name__: config_from_args(cls, args) for cls in _CONFIGS[args.method]}
+        _check_paths(args)
+    except ValueError as error:  # OptionError too
+        return cli_checks.fail(prog, error)
     from tolins.learning import runs
 
     try:
-        configs = {cls.__name__: config_from_args(cls, args) for cls in _CONFIGS[args.method]}
         task = configs["TaskConfig"]
         if args.method == "bc":
             result = runs.run_bc(args.env, task, configs["BCConfig"], args.out)
@@ -74,7 +104,7 @@ def _run(args: argparse.Namespace) -> int:
                 resume=args.resume,
             )
     except (ValueError, FileNotFoundError) as error:
-        print(f"tolins train {args.method}: {error}", file=sys.stderr)
+        print(f"{prog}: {error}", file=sys.stderr)
         return 2
     final = result.final
     print(

@@ -1,0 +1,130 @@
+"""Bad options of every ``tolins`` command: exit status 2, one line on stderr naming the
+option and what is allowed, no traceback, and nothing run or written first."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from tolins import cli_checks
+from tolins.cli import build_parser, main
+from tolins.envs.tasks import GENERIC_ID, TASKS
+
+ENV = TASKS[1].gym_id
+PROC = Path("/proc/self").is_dir()  # a folder in which nothing can be created (Linux)
+
+
+def _cases(tmp: Path) -> list[tuple[list[str], str]]:
+    """(argv, the option its one-line error names)."""
+    file = tmp / "file"
+    run = tmp / "run"
+    kinematic = ["--backend", "kinematic"]
+    new = ["--out", str(tmp / "new")]
+    cases = [
+        (["train", "rs-gail", "--env", ENV, "--out", str(file)], "--out"),
+        (["train", "bc", "--env", ENV, "--out", str(file / "sub")], "--out"),
+        (["train", "rs-gail", "--env", ENV, "--out", str(run)], "--resume"),
+        (["train", "rs-gail", "--env", ENV, *new, "--init", str(tmp / "no.pt")], "--init"),
+        (["train", "tolerance-guided", "--env", ENV, *new, "--nominal", str(run)], "--nominal"),
+        (["record", "--env", GENERIC_ID, "--out", str(tmp / "x.rrd")], "--env"),
+        (["record", "--env", ENV, "--out", str(tmp / "x.txt")], "--out"),
+        (["record", "--env", ENV, "--out", str(run)], "--out"),
+        (["record", "--env", ENV, "--out", str(tmp / "x.rrd"), "--seed", "-5"], "--seed"),
+        (["demo", "--seed", str(cli_checks.SEED_MAX + 1)], "--seed"),
+        (["infer-study", "--seed", "-1"], "--seed"),
+        (["infer-study", "--seed", "one"], "--seed"),
+        (["infer-study", "--json", str(file / "x.json")], "--json"),
+        (["infer-study", "--plot", str(tmp / "x.pdf")], "--plot"),
+        (["train", "bc", "--env", ENV, "--out", str(tmp / "new"), "--seed", "-1"], "--seed"),
+        (["train", "rs-gail", "--env", ENV, "--out", str(tmp / "new"), "--seed", "-1"], "--seed"),
+        (["embed", "train", "--seed", "-1"], "--seed"),
+        (["embed", "train", "--out", str(run)], "--out"),
+        (["bench", "--out", str(file), "--profile", "tiny", *kinematic], "--out"),
+        (["bench", "--seeds", "0", "--out", str(tmp / "new")], "--seeds"),
+        (["train", "bc", "--env", "CartPole-v1", "--out", str(tmp / "new")], "--env"),
+        (["train", "tolerance-guided", "--env", f"{ENV},tolins/Nope-v1", *new], "--env"),
+        (["replay", str(file), "--web", "--port", "-1"], "--port"),
+        (["replay", str(file), "--web", "--grpc-port", "65536"], "--grpc-port"),
+        (["replay", str(file), "--web", "--port", "7000", "--grpc-port", "7000"], "--port"),
+        (["replay", str(file), "--screenshot", str(tmp / "shot.jpg")], "--screenshot"),
+    ]
+    if PROC:
+        cases += [
+            (["infer-study", "--json", "/proc/x.json"], "--json"),
+            (["record", "--env", ENV, "--out", "/proc/x.rrd"], "--out"),
+            (["bench", "--out", "/proc/x", "--profile", "tiny"], "--out"),
+            (["train", "bc", "--env", ENV, "--out", "/proc/x"], "--out"),
+            (["embed", "train", "--out", "/proc/x.pt"], "--out"),
+        ]
+    return cases
+
+
+def _ids() -> list[str]:
+    return [" ".join(argv[:2]) + f" {option}" for argv, option in _cases(Path("/t"))]
+
+
+@pytest.fixture
+def folder(tmp_path: Path) -> Path:
+    build_parser()  # the parser's own imports are paid once, not by the case timed
+    (tmp_path / "file").write_text("not a folder")
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "checkpoint.pt").write_bytes(b"an earlier run")
+    return tmp_path
+
+
+@pytest.mark.parametrize("index", range(len(_ids())), ids=_ids())
+def test_a_bad_option_exits_2_with_one_line_before_any_work(index, folder, capsys):
+    argv, option = _cases(folder)[index]
+    before = sorted(folder.rglob("*"))
+    began = time.perf_counter()
+    status = main(argv)
+    elapsed = time.perf_counter() - began
+    out, err = capsys.readouterr()
+    assert status == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err  # no traceback, no progress bar: nothing started
+    assert option in lines[0] and "allowed" in lines[0], lines[0]
+    assert lines[0].startswith("tolins "), lines[0]
+    assert out == ""
+    assert sorted(folder.rglob("*")) == before  # nothing written, not even a folder
+    assert elapsed < 0.5, f"{elapsed:.2f} s: the check came after some work"
+
+
+def test_record_names_the_ids_it_supports(folder, capsys):
+    assert main(["record", "--env", GENERIC_ID, "--out", str(folder / "x.rrd")]) == 2
+    err = capsys.readouterr().err
+    assert "socket" in err
+    assert all(task.gym_id in err for task in TASKS)
+
+
+def test_the_checkpoint_name_is_rs_gails():
+    from tolins.learning import rs_gail, train_cli
+
+    assert train_cli.CHECKPOINT == rs_gail.CHECKPOINT
+
+
+def test_good_paths_pass_and_nothing_is_created(tmp_path):
+    new = tmp_path / "a" / "b"
+    assert cli_checks.output_folder("--out", new) == new
+    assert cli_checks.output_file("--out", new / "x.rrd", suffixes=(".rrd",)) == new / "x.rrd"
+    assert cli_checks.output_folder("--out", tmp_path) == tmp_path
+    assert list(tmp_path.iterdir()) == []  # the probe file is gone, no folder made
+
+
+@pytest.mark.parametrize(
+    ("check", "good", "bad"),
+    [
+        (cli_checks.seed, ["0", str(cli_checks.SEED_MAX)], ["-1", str(2**32), "1.5", ""]),
+        (cli_checks.port, ["1", "65535"], ["0", "-1", "65536", "http"]),
+        (cli_checks.positive_int, ["1", "40"], ["0", "-3", "two"]),
+    ],
+)
+def test_option_types_accept_their_range_only(check, good, bad):
+    import argparse
+
+    assert [check(text) for text in good] == [int(text) for text in good]
+    for text in bad:
+        with pytest.raises(argparse.ArgumentTypeError, match="allowed"):
+            check(text)

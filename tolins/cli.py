@@ -277,6 +277,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.run(args)
     except cli_checks.OptionError as error:
         return cli_checks.fail(_prog(args), error)
+    except KeyboardInterrupt:  # finished stages, checkpoints and written files stay
+        print(f"{_prog(args)}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -78,7 +78,7 @@ def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
     )
     evaluate.add_argument("--policy", required=True, help="MODULE:NAME, PATH, PATH.zip or expert")
     evaluate.add_argument("--env", required=True, help="eval env id, e.g. tolins/Circle2x2-v1")
-    evaluate.add_argument("--episodes", type=int, default=100, help="evaluation episodes")
+    evaluate.add_argument("--episodes", type=positive_int, default=100, help="evaluation episodes")
     evaluate.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
     evaluate.add_argument("--name", help="the row's label (default: --policy)")
     evaluate.add_argument("--out", help="write DIR/results.json (the bench's schema)")
@@ -91,6 +91,8 @@ def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
+    if args.out:
+        output_folder("--out", args.out)
     from tolins.bench.scoring import (
         evaluate_policy,
         format_rows,
@@ -99,9 +101,6 @@ def _evaluate(args: argparse.Namespace) -> int:
     )
 
     name = args.name or args.policy
-    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
-        print(f"tolins evaluate: --out {args.out}: is a file; allowed: a folder", file=sys.stderr)
-        return 2
     try:
         source, rows = reference_rows(args.env, args.reference)
         entry = evaluate_policy(

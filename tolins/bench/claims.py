@@ -1,15 +1,42 @@
-"""The paper's four claims, checked against a run's ``results.json``."""
+"""The paper's four claims, checked against a run's ``results.json`` with interval estimates.
+
+Each claim is a set of pairs ``(better, worse)`` of rows. A pair's evidence is the
+difference of mean reward with its 95 % stratified-bootstrap CI and rliable's probability
+of improvement P(better > worse), both over training seeds (the unit;
+:mod:`tolins.bench.statistics`). Within one run the rows share training seeds and
+evaluation episodes (seed ``s`` of every row starts from the same initial poses, and π_φ
+of seed ``s`` is trained on π_n of seed ``s``), so the difference is *paired*: the
+bootstrap resamples the per-seed differences.
+
+Verdicts are three-valued. A pair *held* when its CI lies above 0, *did not hold* when it
+lies below, and is *inconclusive* when it contains 0. With one training seed the CI is over
+evaluation episodes and decides only beyond ± :func:`~tolins.bench.statistics.margin`
+(the training noise it cannot see: 5.9 reward for two trained rows, 4.1 for a trained row
+against an expert; see :mod:`tolins.bench.statistics`). A claim is the conjunction of its
+pairs: held when every pair held, did not hold when any did not, inconclusive otherwise;
+*not evaluated* when a row is missing.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
-from tolins.bench.results import standard_error
+from tolins.bench.statistics import (
+    EPISODES,
+    Interval,
+    difference,
+    margin,
+    probability_of_improvement,
+    sign,
+    unit_samples,
+)
+from tolins.bench.table import ROWS
 
 HELD, NOT_HELD, NOT_EVALUATED = "held", "did not hold", "not evaluated"
+INCONCLUSIVE = "inconclusive"
+ONE_SEED = "one training seed: training variance not measured"
+_VERDICTS = {1: HELD, -1: NOT_HELD, 0: INCONCLUSIVE}
 
 
 @dataclass(frozen=True)
@@ -42,62 +69,115 @@ CLAIMS: tuple[Claim, ...] = (
 
 @dataclass(frozen=True)
 class Comparison:
-    """One pair of rows: reward difference and its standard error."""
+    """One pair of rows: the difference of mean reward and P(better > worse), each with
+    its 95 % CI."""
 
     better: str
     worse: str
     better_reward: float
     worse_reward: float
-    difference: float
-    standard_error: float
+    difference: Interval
+    improvement: Interval
+    margin: float = 0.0
 
     @property
-    def held(self) -> bool:
-        return self.difference > 0
+    def verdict(self) -> str:
+        """:data:`HELD`, :data:`NOT_HELD` or :data:`INCONCLUSIVE`: the CI of the difference
+        above ``margin``, below ``-margin``, or neither."""
+        return _VERDICTS[sign(self.difference, self.margin)]
 
     def describe(self) -> str:
-        text = (
+        beyond = f" (decisive beyond ±{self.margin:.1f})" if self.margin else ""
+        return (
             f"{self.better} {self.better_reward:.2f} vs {self.worse} {self.worse_reward:.2f}: "
-            f"{self.difference:+.2f} ± {self.standard_error:.2f}"
+            f"{self.difference.format(signed=True)}{beyond}, "
+            f"P({self.better} > {self.worse}) {self.improvement.format()}: {self.verdict}"
         )
-        if self.standard_error > 0:
-            text += f" ({self.difference / self.standard_error:+.1f} s.e.)"
-        return text
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "better": self.better,
+            "worse": self.worse,
+            "difference": self.difference.to_json(),
+            "probability_of_improvement": self.improvement.to_json(),
+            "margin": self.margin,
+            "verdict": self.verdict,
+        }
 
 
 @dataclass(frozen=True)
 class ClaimCheck:
-    """A claim's verdict (:data:`HELD`, :data:`NOT_HELD`, :data:`NOT_EVALUATED`) and numbers."""
+    """A claim's verdict (:data:`HELD`, :data:`NOT_HELD`, :data:`INCONCLUSIVE`,
+    :data:`NOT_EVALUATED`), its pairs and what the intervals are over."""
 
     claim: Claim
     verdict: str
     comparisons: tuple[Comparison, ...]
+    seeds: int = 0
+
+    @property
+    def basis(self) -> str:
+        """What the verdict rests on, e.g. ``5 training seeds`` or the one-seed caveat."""
+        if not self.comparisons:
+            return "rows not run"
+        if self.comparisons[0].difference.over == EPISODES:
+            episodes = self.comparisons[0].difference.n
+            return (
+                f"{ONE_SEED}; 95 % CIs over {episodes} evaluation episodes, decisive only "
+                "beyond the training noise one seed cannot show"
+            )
+        return f"{self.seeds} training seeds; 95 % CIs over seeds"
 
     def to_json(self) -> dict[str, Any]:
         return {
             "statement": self.claim.statement,
             "verdict": self.verdict,
+            "basis": self.basis,
+            "seeds": self.seeds,
             "evidence": [c.describe() for c in self.comparisons],
+            "comparisons": [c.to_json() for c in self.comparisons],
         }
 
 
 def check_claims(results: dict[str, dict[str, Any]]) -> list[ClaimCheck]:
-    """Each claim's verdict on ``results`` (row id → entry with ``reward_mean``, ``reward_std``,
-    ``episodes``, ``seeds``): held iff the first row's mean reward is higher in every pair;
-    not evaluated when a row is missing."""
+    """Each claim's verdict on ``results`` (row id → ``results.json`` entry); not evaluated
+    when one of its rows is missing. Raises ``ValueError`` for entries without per-seed
+    figures (tolins < 0.3)."""
     checks = []
     for claim in CLAIMS:
         if any(row not in results for pair in claim.pairs for row in pair):
             checks.append(ClaimCheck(claim, NOT_EVALUATED, ()))
             continue
         comparisons = tuple(_compare(results, better, worse) for better, worse in claim.pairs)
-        verdict = HELD if all(c.held for c in comparisons) else NOT_HELD
-        checks.append(ClaimCheck(claim, verdict, comparisons))
+        verdicts = {c.verdict for c in comparisons}
+        verdict = NOT_HELD if NOT_HELD in verdicts else HELD if verdicts == {HELD} else INCONCLUSIVE
+        seeds = min(int(results[row]["seeds"]) for pair in claim.pairs for row in pair)
+        checks.append(ClaimCheck(claim, verdict, comparisons, seeds))
     return checks
 
 
 def _compare(results: dict[str, dict[str, Any]], better: str, worse: str) -> Comparison:
-    a, b = results[better], results[worse]
-    error = float(np.hypot(standard_error(a), standard_error(b)))
-    difference = float(a["reward_mean"] - b["reward_mean"])
-    return Comparison(better, worse, a["reward_mean"], b["reward_mean"], difference, error)
+    (x, over_x), (y, over_y) = unit_samples(results[better]), unit_samples(results[worse])
+    over = EPISODES if EPISODES in (over_x, over_y) else over_x
+    if over_x != over_y:  # one row has several seeds, the other one: compare their episodes
+        x, y = _episodes(results[better]), _episodes(results[worse])
+    paired = len(x) == len(y)
+    interval = difference(x, y, over, paired=paired)
+    trained = sum(row in _TRAINED for row in (better, worse))
+    return Comparison(
+        better,
+        worse,
+        float(results[better]["reward_mean"]),
+        float(results[worse]["reward_mean"]),
+        interval,
+        probability_of_improvement(x, y, over),
+        margin(interval, trained),
+    )
+
+
+#: Rows whose policy is trained (their per-seed means carry training variance).
+_TRAINED = frozenset(row.id for row in ROWS if row.trainings)
+
+
+def _episodes(entry: dict[str, Any]) -> list[float]:
+    return [r for seed in entry.get("reward_per_episode") or [] for r in seed]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -35,25 +36,96 @@ def plot_table(
     results: dict[str, dict[str, Any]],
     paper: dict[str, dict[str, tuple[float, float]]],
 ) -> Path:
-    """Reward and success rate of every row, this run (± standard error of the mean)
-    beside the paper (± its std over runs)."""
+    """Reward and success rate of every row, this run (with the 95 % CI of its mean,
+    ``{figure}_ci``; ± standard error for entries without one) beside the paper (± its
+    std over runs)."""
 
     plt = _pyplot()
     rows = list(results)
     x = np.arange(len(rows))
+    over = next(iter(results.values()), {}).get("ci_over", "episodes")
     figure, axes = plt.subplots(2, 1, figsize=(max(6, 0.7 * len(rows) + 2), 6), sharex=True)
     for axis, figure_name in zip(axes, ("reward", "success"), strict=True):
         ours = [results[r][f"{figure_name}_mean"] for r in rows]
-        ours_error = [standard_error(results[r], figure_name) for r in rows]
+        ours_error = np.array([_error_bar(results[r], figure_name) for r in rows]).T
         theirs = [paper[r][figure_name][0] for r in rows]
         theirs_std = [paper[r][figure_name][1] for r in rows]
-        axis.bar(x - 0.2, ours, 0.4, yerr=ours_error, label="tolins (± s.e.)", capsize=2)
+        label = f"tolins (95 % CI over {over})"
+        axis.bar(x - 0.2, ours, 0.4, yerr=ours_error, label=label, capsize=2)
         axis.bar(x + 0.2, theirs, 0.4, yerr=theirs_std, label="paper (± std)", capsize=2, alpha=0.7)
         axis.set_ylabel("success rate" if figure_name == "success" else "reward")
         axis.grid(axis="y", alpha=0.3)
     axes[0].legend()
     axes[1].set_xticks(x, rows)
     figure.tight_layout()
+    return _save(figure, path)
+
+
+def _error_bar(entry: dict[str, Any], figure: str) -> tuple[float, float]:
+    """(below, above) the mean: to the ends of its CI, or one standard error."""
+    mean = entry[f"{figure}_mean"]
+    if f"{figure}_ci" in entry:
+        low, high = entry[f"{figure}_ci"]
+        return max(mean - low, 0.0), max(high - mean, 0.0)
+    error = standard_error(entry, figure)
+    return error, error
+
+
+def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]]) -> Path:
+    """rliable-style interval plot of one claim (a :class:`tolins.bench.claims.ClaimCheck`):
+    each row's mean reward, each pair's difference and P(better > worse), as 95 % CIs
+    (bars) around point estimates (ticks)."""
+    plt = _pyplot()
+    pairs = check.comparisons
+    rows = list(dict.fromkeys(row for c in pairs for row in (c.better, c.worse)))
+    height = 0.9 + 0.42 * max(len(rows), len(pairs))
+    figure, axes = plt.subplots(1, 3, figsize=(13, height), constrained_layout=True)
+    colours = {"held": "tab:green", "did not hold": "tab:red", "inconclusive": "tab:grey"}
+    row_bars = [(r, results[r]["reward_mean"], *results[r]["reward_ci"], "tab:blue") for r in rows]
+    difference = [
+        (
+            f"{c.better} − {c.worse}: {c.verdict}",
+            c.difference.estimate,
+            c.difference.low,
+            c.difference.high,
+            colours[c.verdict],
+        )
+        for c in pairs
+    ]
+    improvement = [
+        (
+            f"P({c.better} > {c.worse})",
+            c.improvement.estimate,
+            c.improvement.low,
+            c.improvement.high,
+            colours[c.verdict],
+        )
+        for c in pairs
+    ]
+    panels = (
+        (row_bars, "mean reward", None),
+        (difference, "difference of mean reward", 0.0),
+        (improvement, "probability of improvement", 0.5),
+    )
+    for axis, (bars, title, reference) in zip(axes, panels, strict=True):
+        for i, (_, estimate, low, high, colour) in enumerate(bars):
+            axis.barh(i, high - low, 0.6, left=low, color=colour, alpha=0.75)
+            axis.plot([low, high], [i, i], "|", color=colour, ms=14, mew=2)  # width-0 CIs too
+            axis.vlines(estimate, i - 0.28, i + 0.22, color="black", alpha=0.6)
+        if reference is not None:
+            axis.axvline(reference, color="black", lw=0.8, ls="--")
+        axis.set_yticks(range(len(bars)), [b[0] for b in bars])
+        axis.invert_yaxis()
+        axis.set_title(title)
+        axis.grid(axis="x", alpha=0.25)
+        for side in ("top", "right"):
+            axis.spines[side].set_visible(False)
+    for i, pair in enumerate(pairs):  # one training seed: the margin a CI must clear
+        if pair.margin:
+            axes[1].barh(i, 2 * pair.margin, 0.95, left=-pair.margin, color="grey", alpha=0.15)
+    axes[2].set_xlim(-0.02, 1.02)
+    title = f"{check.claim.statement}: {check.verdict} ({check.basis})"
+    figure.suptitle("\n".join(textwrap.wrap(title, 150)), fontsize=9)
     return _save(figure, path)
 
 

@@ -110,6 +110,12 @@ def _figures(run: BenchRun, trainer: Trainer, out: Path) -> list[Path]:
             env_ids += [*(t for tr in row.trainings for t in tr.env_ids), row.eval_env]
     sockets = {t.name: t.socket for t in TASKS if t.gym_id in env_ids}
     written.append(plots.plot_tolerance_images(out / "tolerance_images.png", sockets))
+    for check in run.claims:
+        path = out / "claims" / f"{check.claim.name}.png"
+        if check.comparisons:
+            written.append(plots.plot_claim(path, check, results))
+        else:  # an earlier run's plot would read as this run's
+            path.unlink(missing_ok=True)
     return written
 
 
@@ -160,29 +166,46 @@ def _pm(mean: float, std: float, digits: int = 2) -> str:
     return f"{mean:.{digits}f} ± {std:.{digits}f}"
 
 
+#: Figures whose 95 % CI (and, for reward, IQM) get columns of their own in the table.
+_WITH_CI = ("reward", "success")
+
+
+def _ci(entry: dict[str, Any], key: str, digits: int = 2) -> str:
+    low, high = entry.get(key) or (None, None)
+    return "–" if low is None else f"[{low:.{digits}f}, {high:.{digits}f}]"
+
+
 def format_results_table(results: dict[str, dict[str, Any]]) -> str:
-    """Table 1 as Markdown: each figure of this run beside the paper's."""
+    """Table 1 as Markdown: each figure of this run beside the paper's; reward and success
+    with the 95 % CI of their mean, reward with the IQM of the per-seed means."""
     header = "| ID | policy | train env | eval env |"
     rule = "|---|---|---|---|"
     for name, _ in _FIGURES:
-        header += f" {name} | paper |"
-        rule += "---|---|"
+        extra = " 95 % CI |" + (" IQM |" if name == "reward" else "") if name in _WITH_CI else ""
+        header += f" {name} |{extra} paper |"
+        rule += "---|" * (2 + extra.count("|"))
     lines = [header, rule]
     for row_id, entry in results.items():
         cells = [row_id, entry["policy"], entry["train_env"], _short(entry["eval_env"])]
         for name, digits in _FIGURES:
-            paper = PAPER[row_id][name]
-            cells += [_pm(entry[f"{name}_mean"], entry[f"{name}_std"], digits), _pm(*paper)]
+            cells.append(_pm(entry[f"{name}_mean"], entry[f"{name}_std"], digits))
+            if name in _WITH_CI:
+                cells.append(_ci(entry, f"{name}_ci", digits))
+            if name == "reward":
+                iqm = entry.get("reward_iqm")
+                cells.append("–" if iqm is None else f"{iqm:.{digits}f}")
+            cells.append(_pm(*PAPER[row_id][name]) if row_id in PAPER else "–")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
 def format_claims(claims: list[ClaimCheck]) -> str:
-    """One bullet per claim: the verdict and the reward comparisons behind it."""
+    """One bullet per claim: the verdict, what it rests on (training seeds, or the one-seed
+    caveat), and each pair's difference [95 % CI] and P(better > worse) [95 % CI]."""
     lines = []
     for check in claims:
         evidence = "; ".join(c.describe() for c in check.comparisons) or "rows not run"
-        lines.append(f"- **{check.claim.statement}: {check.verdict}.** {evidence}")
+        lines.append(f"- **{check.claim.statement}: {check.verdict}** ({check.basis}). {evidence}")
     return "\n".join(lines)
 
 
@@ -223,7 +246,8 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         f"evaluations {config.workers} at a time). "
         f"{seeds} training seed(s), {episodes} evaluation episodes per row and seed "
         f"(seeds {FIRST_SEED}…); ± is the std over "
-        f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs).",
+        f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs). "
+        f"{_interval_note(seeds)}",
         "",
         format_results_table(run.results),
         "",
@@ -231,7 +255,11 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "",
         "## The paper's claims in this run",
         "",
+        _VERDICT_RULE,
+        "",
         format_claims(run.claims),
+        "",
+        *(f"![{c.claim.name}](claims/{c.claim.name}.png)" for c in run.claims if c.comparisons),
     ]
     if run.study is not None:
         from tolins.inference.report import format_markdown as format_study
@@ -262,6 +290,28 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "",
     ]
     return "\n".join(parts)
+
+
+_VERDICT_RULE = (
+    "Each pair: the difference of mean reward [its 95 % stratified-bootstrap CI] and "
+    "P(better > worse) [95 % CI] (rliable). *held*: the CI of the difference lies above 0; "
+    "*did not hold*: below 0; *inconclusive*: it contains 0. With one training seed the CIs "
+    "are over episodes and decide only beyond the training noise they cannot show (±5.9 "
+    "reward for two trained rows, ±4.1 for a trained row against an expert). A claim holds "
+    "when every pair held and does not when any did not."
+)
+
+
+def _interval_note(seeds: int) -> str:
+    if seeds > 1:
+        return (
+            f"[CI]: the 95 % stratified-bootstrap CI of the mean over the {seeds} training "
+            "seeds (rliable, 2000 resamples); IQM: the interquartile mean of the per-seed means."
+        )
+    return (
+        "[CI]: the 95 % bootstrap CI over the episodes of the one training seed (training "
+        "variance not measured); IQM: over those episodes."
+    )
 
 
 def _short(env_id: str) -> str:

@@ -11,13 +11,21 @@ replications, 95 %). With one training seed the samples are the evaluation episo
 
 Verdicts (:func:`sign`) are three-valued: an interval above 0 is positive, below 0
 negative, one that contains 0 undecided. **One-seed rule**: an interval over episodes
-decides only when it clears ``±`` :data:`ONE_SEED_MARGIN` (5.9 reward) entirely. The margin
-is the training noise a single seed cannot show: two rows whose per-seed means each
-spread by :data:`TRAINING_SPREAD` (the largest std over seeds the paper profile measured,
-C4.1 2.07; C2.2 2.06, P2.2 1.99, C1.2 1.80) differ by training alone with a std of up to
-√2 × 2.07 = 2.9, and 2 × 2.9 is its 95 % bound. So an episode-level difference is called
-only when its whole episode-level CI lies beyond what retraining could plausibly undo;
-anything smaller (e.g. +0.8 ± 0.6) is inconclusive, however many standard errors it is.
+decides only when it clears ``±`` :func:`margin` entirely, 5.9 reward
+(:data:`ONE_SEED_MARGIN`) for two trained rows. The margin is the training noise a single
+seed cannot show: two rows whose per-seed means each spread by :data:`TRAINING_SPREAD`
+(the largest std over seeds the paper profile measured, C4.1 2.07; C2.2 2.06, P2.2 1.99,
+C1.2 1.80) differ by training alone with a std of up to √2 × 2.07 = 2.9, and 2 × 2.9 is
+its 95 % bound (one trained row against an expert: 2 × 2.07 = 4.1). So an episode-level
+difference is called only when its whole episode-level CI lies beyond what retraining
+could plausibly undo; anything smaller (e.g. +0.8 ± 0.6) is inconclusive, however many
+standard errors it is.
+
+The resampling is rliable's (:class:`rliable.library.StratifiedBootstrap` and
+``StratifiedIndependentBootstrap`` through ``get_interval_estimates``). Its metrics
+``aggregate_iqm`` and ``probability_of_improvement`` call scipy once per resample (0.2–0.7
+ms each, seconds per row); :func:`iqm` and :func:`improvement` compute the same numbers in
+numpy (tested equal to rliable's) and are what the bootstrap evaluates.
 
 rliable draws its resamples from numpy's global RNG; every estimate here seeds it with
 :data:`BOOTSTRAP_SEED` and restores it afterwards (under a lock), so the same data give
@@ -84,6 +92,21 @@ def _seeded_global_rng() -> Iterator[None]:
             np.random.set_state(state)
 
 
+def iqm(x: np.ndarray) -> float:
+    """The interquartile mean of ``x`` (all its entries): rliable's ``aggregate_iqm``
+    (``scipy.stats.trim_mean(x, 0.25)``: sort, drop ⌊n/4⌋ values at each end, average)."""
+    values = np.sort(np.asarray(x, dtype=float), axis=None)
+    cut = int(0.25 * len(values))
+    return float(values[cut : len(values) - cut].mean())
+
+
+def improvement(x: np.ndarray, y: np.ndarray) -> float:
+    """P(X > Y) of two samples (ties count half): rliable's ``probability_of_improvement``
+    for one task (its Mann-Whitney U / (n_x n_y))."""
+    a, b = np.ravel(x)[:, None], np.ravel(y)[None, :]
+    return float(np.mean(a > b) + 0.5 * np.mean(a == b))
+
+
 def _estimate(
     scores: np.ndarray | list[np.ndarray], func: Callable[..., np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -124,9 +147,7 @@ def row_intervals(values: dict[str, list[list[float]]]) -> dict[str, Any]:
     scores = np.asarray(columns, dtype=float).T
 
     def func(x: np.ndarray) -> np.ndarray:
-        from rliable import metrics
-
-        return np.concatenate([x.mean(axis=0), [metrics.aggregate_iqm(x[:, 0])]])
+        return np.concatenate([x.mean(axis=0), [iqm(x[:, 0])]])
 
     point, interval = _estimate(scores, func)
     entry: dict[str, Any] = {
@@ -161,31 +182,47 @@ def difference(
 
 
 def probability_of_improvement(x: Sequence[float], y: Sequence[float], over: str) -> Interval:
-    """P(X > Y) (rliable's Mann-Whitney form: a random sample of x beats one of y, ties
-    half) with its CI, x and y resampled independently."""
-    from rliable import metrics
-
+    """P(X > Y) (:func:`improvement`: a random sample of x beats one of y, ties half) with
+    its CI, x and y resampled independently."""
     a, b = _samples(x, "x")[:, None], _samples(y, "y")[:, None]
-    point, interval = _estimate(
-        [a, b], lambda p, q: np.array([metrics.probability_of_improvement(p, q)])
-    )
+    point, interval = _estimate([a, b], lambda p, q: np.array([improvement(p, q)]))
     return Interval(
         float(point[0]), float(interval[0, 0]), float(interval[1, 0]), over, min(len(a), len(b))
     )
 
 
-def margin(interval: Interval) -> float:
-    """How far from 0 ``interval`` must lie to decide: 0 over seeds, the one-seed margin
-    over episodes."""
-    return 0.0 if interval.over == SEEDS else ONE_SEED_MARGIN
+def margin(interval: Interval, trained: int = 2) -> float:
+    """How far from 0 a difference's ``interval`` must lie to decide: 0 over seeds; over
+    episodes (one training seed) 2 × :data:`TRAINING_SPREAD` × √``trained``, ``trained``
+    the number of the two compared rows that were trained (an expert row has no training
+    variance): 5.9 reward for two (:data:`ONE_SEED_MARGIN`), 4.1 for one, 0 for none."""
+    if interval.over == SEEDS:
+        return 0.0
+    return round(2 * TRAINING_SPREAD * math.sqrt(trained), 1)
 
 
-def sign(interval: Interval, margin_: float | None = None) -> int:
-    """+1 if the CI lies above ``margin_`` (default :func:`margin`), −1 below −margin, 0
-    if undecided."""
-    bound = margin(interval) if margin_ is None else margin_
-    if interval.low > bound:
+def sign(interval: Interval, margin_: float = 0.0) -> int:
+    """+1 if the CI lies above ``margin_``, −1 below ``-margin_``, 0 if undecided."""
+    if interval.low > margin_:
         return 1
-    if interval.high < -bound:
+    if interval.high < -margin_:
         return -1
     return 0
+
+
+def unit_samples(entry: dict[str, Any], figure: str = "reward") -> tuple[np.ndarray, str]:
+    """The samples of a ``results.json`` entry's ``figure`` on the unit, and which unit:
+    the per-seed means (``{figure}_per_seed``) with ≥ 2 training seeds, else the one seed's
+    episodes (``reward_per_episode``, reward only)."""
+    per_seed = entry.get(f"{figure}_per_seed")
+    if per_seed is None:
+        raise ValueError(
+            f"no {figure}_per_seed in the entry (a results.json of tolins < 0.3); "
+            "allowed: entries written by tolins bench ≥ 0.3 (re-run it to re-report)"
+        )
+    if len(per_seed) > 1:
+        return _samples(per_seed, f"{figure}_per_seed"), SEEDS
+    if figure != "reward":
+        raise ValueError(f"{figure}: one training seed and no episodes; allowed: reward")
+    episodes = entry.get("reward_per_episode") or [[]]
+    return _samples(episodes[0], "reward_per_episode"), EPISODES

@@ -1,0 +1,259 @@
+"""Interval estimates (rliable) and the three-valued claims on synthetic data with known
+answers."""
+
+from __future__ import annotations
+
+import copy
+import functools
+
+import numpy as np
+import pytest
+
+from tolins.bench.claims import (
+    CLAIMS,
+    HELD,
+    INCONCLUSIVE,
+    NOT_EVALUATED,
+    NOT_HELD,
+    ONE_SEED,
+    check_claims,
+)
+from tolins.bench.results import row_entry
+from tolins.bench.statistics import (
+    EPISODES,
+    ONE_SEED_MARGIN,
+    SEEDS,
+    difference,
+    improvement,
+    iqm,
+    margin,
+    probability_of_improvement,
+    row_intervals,
+    sign,
+    unit_samples,
+)
+from tolins.bench.table import PAPER, ROWS
+from tolins.rollout import Episode
+
+BY_ID = {row.id: row for row in ROWS}
+
+
+def _entry(row_id: str, per_seed: list[list[float]]) -> dict:
+    """The results.json entry of ``row_id`` whose seed s has episodes of these rewards."""
+    key = (row_id, tuple(tuple(seed) for seed in per_seed))
+    return copy.deepcopy(_cached_entry(key))
+
+
+@functools.cache
+def _cached_entry(key: tuple) -> dict:  # the bootstraps of 15 rows take seconds
+    row_id, per_seed = key
+    episodes = [[Episode(float(r), True, 30, 0) for r in seed] for seed in per_seed]
+    return row_entry(BY_ID[row_id], episodes)
+
+
+def _seeds(means: list[float], episodes: int = 4, spread: float = 1.0) -> list[list[float]]:
+    """Per-seed episode rewards with exactly these per-seed means."""
+    offsets = np.linspace(-spread, spread, episodes)
+    return [list(mean + offsets) for mean in means]
+
+
+# --- intervals ------------------------------------------------------------------------------
+
+
+def test_disjoint_seeds_are_positive_identical_undecided_reversed_negative():
+    better, worse = [10.0, 11.0, 12.0, 10.5, 11.5], [5.0, 6.0, 5.5, 6.5, 4.5]
+    assert sign(difference(better, worse, SEEDS)) == 1
+    assert sign(difference(worse, better, SEEDS)) == -1
+    same = difference(better, better, SEEDS)
+    assert same.estimate == 0 and same.low < 0 < same.high  # resampled independently
+    assert sign(same) == 0
+    paired = difference(better, better, SEEDS, paired=True)
+    assert (paired.low, paired.high) == (0.0, 0.0) and sign(paired) == 0
+
+
+def test_three_seeds_give_the_range_of_the_per_seed_differences():
+    # The percentile bootstrap of 3 samples: all three drawn equal has probability
+    # 1/27 > 2.5 %, so the 95 % CI runs from the smallest to the largest difference.
+    interval = difference([3.0, 1.0, 8.0], [1.0, 1.5, 2.0], SEEDS, paired=True)
+    assert interval.estimate == pytest.approx(np.mean([2.0, -0.5, 6.0]))
+    assert (interval.low, interval.high) == pytest.approx((-0.5, 6.0))
+    assert sign(interval) == 0  # one seed of three went the other way
+    held = difference([3.0, 2.0, 8.0], [1.0, 1.5, 2.0], SEEDS, paired=True)
+    assert held.low == pytest.approx(0.5) and sign(held) == 1
+
+
+def test_the_ci_of_a_mean_matches_normal_theory():
+    x = np.random.default_rng(7).normal(0.0, 1.0, 400)
+    interval = difference(x, np.zeros(400), EPISODES, paired=True)
+    half_width = 1.96 * x.std() / np.sqrt(len(x))
+    assert interval.low == pytest.approx(x.mean() - half_width, abs=0.2 * half_width)
+    assert interval.high == pytest.approx(x.mean() + half_width, abs=0.2 * half_width)
+
+
+def test_probability_of_improvement_known_answers():
+    x, y = [5.0, 6.0, 7.0], [1.0, 2.0, 3.0]
+    assert probability_of_improvement(x, y, SEEDS).estimate == 1.0
+    assert probability_of_improvement(y, x, SEEDS).estimate == 0.0
+    assert probability_of_improvement(x, x, SEEDS).estimate == 0.5
+    half = probability_of_improvement([1.0, 3.0], [2.0, 2.0], SEEDS)
+    assert half.estimate == 0.5 and half.low == 0.0 and half.high == 1.0
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 5, 8, 100])
+def test_iqm_and_improvement_are_rliables_metrics(n):
+    from rliable import metrics
+
+    rng = np.random.default_rng(n)
+    x, y = rng.integers(0, 4, (n, 1)).astype(float), rng.normal(1.5, 1.0, (n + 3, 1))
+    assert iqm(y) == pytest.approx(metrics.aggregate_iqm(y), abs=1e-12)
+    assert improvement(x, y) == pytest.approx(metrics.probability_of_improvement(x, y))
+    assert improvement(x, x) == 0.5 == metrics.probability_of_improvement(x, x)
+    ties = rng.integers(0, 3, (n, 1)).astype(float)  # many ties: they count half
+    assert improvement(x, ties) == pytest.approx(metrics.probability_of_improvement(x, ties))
+
+
+def test_row_intervals_over_seeds_iqm_trims_a_quartile_each_side():
+    values = {name: [[v] * 3 for v in (1.0, 2.0, 3.0, 4.0, 100.0)] for name in ("reward",)}
+    values |= {name: [[1.0] * 3] * 5 for name in ("success", "steps", "collisions")}
+    entry = row_intervals(values)
+    assert (entry["ci_over"], entry["ci_n"]) == ("seeds", 5)
+    assert entry["reward_iqm"] == pytest.approx(3.0)  # mean of 2, 3, 4
+    low, high = entry["reward_ci"]
+    assert low < 22.0 < high  # the mean, pulled up by the outlying seed
+    assert entry["success_ci"] == [1.0, 1.0]
+
+
+def test_one_seed_intervals_are_over_its_episodes():
+    entry = _entry("C2.1", [[10.0, 12.0, 14.0, 16.0]])
+    assert (entry["ci_over"], entry["ci_n"]) == ("episodes", 4)
+    assert entry["reward_per_seed"] == [13.0]
+    assert entry["reward_per_episode"] == [[10.0, 12.0, 14.0, 16.0]]
+    assert entry["reward_ci"][0] < 13.0 < entry["reward_ci"][1]
+    samples, over = unit_samples(entry)
+    assert over == EPISODES and list(samples) == [10.0, 12.0, 14.0, 16.0]
+    several = _entry("C2.1", _seeds([10.0, 12.0]))
+    samples, over = unit_samples(several)
+    assert over == SEEDS and list(samples) == pytest.approx([10.0, 12.0])
+
+
+def test_intervals_are_reproducible_and_leave_numpys_global_rng_alone():
+    np.random.seed(1234)
+    expected = np.random.random()
+    np.random.seed(1234)
+    x, y = [1.0, 4.0, 2.0, 8.0, 5.0], [0.0, 1.0, 3.0, 2.0, 2.5]
+    first = difference(x, y, SEEDS)
+    assert np.random.random() == expected  # the bootstrap did not move the global stream
+    assert difference(x, y, SEEDS) == first
+    assert probability_of_improvement(x, y, SEEDS) == probability_of_improvement(x, y, SEEDS)
+
+
+def test_the_one_seed_margin_counts_the_trained_rows():
+    over_episodes = difference([1.0, 2.0], [0.0, 1.0], EPISODES)
+    assert margin(over_episodes) == ONE_SEED_MARGIN == 5.9
+    assert margin(over_episodes, trained=1) == 4.1
+    assert margin(over_episodes, trained=0) == 0.0
+    assert margin(difference([1.0, 2.0], [0.0, 1.0], SEEDS)) == 0.0
+
+
+def test_bad_samples_and_old_entries_are_refused():
+    with pytest.raises(ValueError, match="allowed: ≥ 1 finite number"):
+        difference([], [1.0], SEEDS)
+    with pytest.raises(ValueError, match="allowed: equal lengths"):
+        difference([1.0, 2.0], [1.0], SEEDS, paired=True)
+    old = {"reward_mean": 1.0, "reward_std": 0.1, "episodes": 100, "seeds": 1}
+    with pytest.raises(ValueError, match=r"tolins < 0\.3"):
+        unit_samples(old)
+
+
+# --- claims ---------------------------------------------------------------------------------
+
+
+def _table(means: dict[str, list[float]], episodes: int = 4) -> dict[str, dict]:
+    return {row_id: _entry(row_id, _seeds(m, episodes)) for row_id, m in means.items()}
+
+
+def _paper_table(seeds: int = 5) -> dict[str, list[float]]:
+    """Every row at the paper's mean, its seeds spread by ± the paper's std."""
+    offsets = np.linspace(-1.0, 1.0, seeds)
+    return {r: list(PAPER[r]["reward"][0] + PAPER[r]["reward"][1] * offsets) for r in PAPER}
+
+
+def test_every_claim_holds_on_the_papers_own_table_with_five_seeds():
+    checks = check_claims(_table(_paper_table()))
+    assert [c.verdict for c in checks] == [HELD] * len(CLAIMS)
+    polygon = checks[-1]
+    (pair,) = polygon.comparisons
+    assert pair.difference.over == SEEDS and pair.difference.n == 5
+    assert pair.difference.estimate == pytest.approx(16.01 - 15.82)
+    assert pair.improvement.estimate > 0.5
+    assert polygon.basis == "5 training seeds; 95 % CIs over seeds"
+    assert pair.describe().startswith("P2.2 16.01 vs P2.1 15.82: +0.19 [")
+    assert polygon.to_json()["comparisons"][0]["verdict"] == HELD
+
+
+def test_a_half_standard_error_difference_is_inconclusive():
+    # The issue's example: P2.2 vs P2.1 at +0.23 ± 0.50 was called "held".
+    means = _paper_table(3)
+    means["P2.1"] = [21.0, 21.5, 21.8]
+    means["P2.2"] = [21.9, 21.0, 22.1]  # per-seed differences +0.9, -0.5, +0.3
+    check = {c.claim.name: c for c in check_claims(_table(means))}["polygon_transfer"]
+    assert check.comparisons[0].difference.estimate == pytest.approx(0.7 / 3)
+    assert check.verdict == INCONCLUSIVE
+
+
+@pytest.mark.parametrize(
+    ("row_id", "claim"),
+    [
+        ("C1.2", "rs_gail"),
+        ("C3.1", "tolerance_guided"),
+        ("C4.1", "inference"),
+        ("P2.1", "polygon_transfer"),
+    ],
+)
+def test_a_claim_did_not_hold_when_its_baseline_wins_on_every_seed(row_id, claim):
+    means = _paper_table()
+    means[row_id] = [30.0 + i for i in range(5)]
+    verdicts = {c.claim.name: c.verdict for c in check_claims(_table(means))}
+    assert verdicts[claim] == NOT_HELD
+    assert [v for name, v in verdicts.items() if name != claim] == [HELD] * 3
+
+
+def test_a_claim_with_one_undecided_pair_is_inconclusive_and_a_missing_row_not_evaluated():
+    means = _paper_table()
+    means["C1.3"] = [m + 10 for m in means["C1.1"]]  # beats the expert and BC...
+    for seed in (0, 1):  # ...except on two seeds of five, against the expert
+        means["C1.3"][seed] = means["C1.1"][seed] - 5
+    del means["P2.2"]
+    checks = {c.claim.name: c for c in check_claims(_table(means))}
+    assert [c.verdict for c in checks["rs_gail"].comparisons][:2] == [INCONCLUSIVE, HELD]
+    assert checks["rs_gail"].verdict == INCONCLUSIVE
+    assert checks["polygon_transfer"].verdict == NOT_EVALUATED
+    assert checks["polygon_transfer"].to_json()["evidence"] == []
+
+
+def test_one_training_seed_decides_only_beyond_the_training_noise():
+    def verdict(better: float, worse: float, rows=("C3.2", "C3.1")) -> tuple[str, object]:
+        # 40 episodes per row within ±1 of its mean: the episode-level CI is narrow
+        claim = next(c for c in CLAIMS if rows in c.pairs)
+        means = {r: _paper_table(1)[r] for pair in claim.pairs for r in pair}
+        means[rows[0]], means[rows[1]] = [better], [worse]
+        check = next(c for c in check_claims(_table(means, 40)) if c.claim == claim)
+        pair = next(p for p in check.comparisons if (p.better, p.worse) == rows)
+        return pair.verdict, check
+
+    small, check = verdict(20.8, 20.0)  # +0.8 at many standard errors: not evidence
+    assert small == INCONCLUSIVE
+    assert check.basis.startswith(ONE_SEED)
+    assert check.comparisons[0].difference.over == EPISODES
+    assert check.comparisons[0].margin == 5.9
+    assert verdict(30.0, 20.0)[0] == HELD
+    assert verdict(20.0, 30.0)[0] == NOT_HELD
+    # π_n against an expert: one trained row, margin 4.1
+    assert verdict(25.0, 20.0, ("C2.3", "C2.1"))[0] == HELD
+    assert verdict(23.5, 20.0, ("C2.3", "C2.1"))[0] == INCONCLUSIVE
+
+
+def test_claims_refuse_results_without_per_seed_figures():
+    old = {r: {"reward_mean": 1.0, "reward_std": 0.1, "episodes": 100, "seeds": 1} for r in PAPER}
+    with pytest.raises(ValueError, match="reward_per_seed"):
+        check_claims(old)

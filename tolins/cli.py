@@ -28,15 +28,16 @@ def _record(args: argparse.Namespace) -> int:
     import gymnasium as gym
     from tqdm import tqdm
 
-    from tolins.policies.experts import EXPERTS
+    from tolins.learning.actors import make_actor
     from tolins.record import record_episodes
 
-    env = gym.make(args.env)
+    env = gym.make(args.env, backend=args.backend)
     try:
+        policy = make_actor(args.policy, env.unwrapped.nominal_socket)
         with tqdm(total=args.episodes, desc=f"recording {args.env}", unit="episode") as bar:
             episodes = record_episodes(
                 env,
-                EXPERTS[args.policy](),
+                policy,
                 args.episodes,
                 args.out,
                 seed=args.seed,
@@ -60,6 +61,13 @@ def _replay(args: argparse.Namespace) -> int:
         )
     if args.screenshot is not None:
         cli_checks.output_file("--screenshot", args.screenshot, suffixes=(".png",))
+    picked = "--step" if args.step is not None else "--time" if args.time is not None else None
+    if picked and args.screenshot is None:
+        raise cli_checks.OptionError(
+            f"{picked} picks what a screenshot shows; allowed: with --screenshot"
+        )
+    if (args.step or 0) < 0 or (args.time or 0.0) < 0:
+        raise cli_checks.OptionError(f"{picked} is negative; allowed: a step ≥ 0 or a time ≥ 0 s")
     from tolins.record import RrdError, replay
 
     try:
@@ -69,6 +77,8 @@ def _replay(args: argparse.Namespace) -> int:
             screenshot=args.screenshot,
             web_port=args.port,
             grpc_port=args.grpc_port,
+            step=args.step,
+            time=args.time,
         )
     except (RrdError, ValueError, RuntimeError) as error:
         print(f"tolins replay: {error}", file=sys.stderr)
@@ -158,14 +168,22 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend", default="mujoco", choices=["mujoco", "kinematic"], help="simulator"
     )
     demo.set_defaults(run=_demo)
-    record = commands.add_parser("record", help="record expert episodes to a rerun .rrd file")
+    record = commands.add_parser("record", help="record a policy's episodes to a rerun .rrd file")
     record.add_argument(
         "--env",
         required=True,
         type=cli_checks.preset_env_ids(),
         help="a preset env id, e.g. tolins/Circle2x2-v1",
     )
-    record.add_argument("--policy", default="safe", choices=["safe", "efficient"], help="expert")
+    record.add_argument(
+        "--policy",
+        default="safe",
+        help="safe, efficient (the experts), a tolins policy file PATH, an SB3 PATH.zip or "
+        "MODULE:NAME (as `tolins evaluate --policy`)",
+    )
+    record.add_argument(
+        "--backend", default="mujoco", choices=["mujoco", "kinematic"], help="simulator"
+    )
     record.add_argument("--episodes", type=positive_int, default=5, help="episodes")
     record.add_argument("--out", required=True, help="output file, FILE.rrd (replaced if present)")
     record.add_argument("--seed", type=seed, default=0, help="seed of the first episode")
@@ -175,6 +193,13 @@ def build_parser() -> argparse.ArgumentParser:
     mode = replay.add_mutually_exclusive_group()
     mode.add_argument("--web", action="store_true", help="serve the web viewer on 127.0.0.1")
     mode.add_argument("--screenshot", metavar="OUT.png", help="render headless to a PNG")
+    when = replay.add_mutually_exclusive_group()
+    when.add_argument(
+        "--step", type=int, help="the control step the screenshot shows (default: the last)"
+    )
+    when.add_argument(
+        "--time", type=float, metavar="SECONDS", help="the simulated time the screenshot shows"
+    )
     replay.add_argument(
         "--port", type=cli_checks.port, default=9090, help="web viewer port (with --web)"
     )

@@ -57,12 +57,13 @@ def series_path(quantity: str, index: int) -> str:
     return f"/{quantity}/{episode_name(index)}"
 
 
-def default_blueprint(extent: float | None = None) -> rrb.Blueprint:
+def default_blueprint(extent: float | None = None, *, follow: bool = False) -> rrb.Blueprint:
     """The 3-D scene beside the plots and the event log, on the ``step`` timeline.
 
     ``extent`` (mm), the board's half-size, places the camera in front of and above the
     socket, looking down at it (as the MJCF's ``overview`` camera); ``None`` lets the
-    viewer choose.
+    viewer choose. ``follow``: the time panel follows the latest data (the viewer opens
+    at the last step) instead of playing from step 0.
     """
     plots = rrb.Vertical(
         *(
@@ -92,6 +93,6 @@ def default_blueprint(extent: float | None = None) -> rrb.Blueprint:
     )
     return rrb.Blueprint(
         rrb.Horizontal(scene, plots, column_shares=[3, 2]),
-        rrb.TimePanel(timeline=STEP),
+        rrb.TimePanel(timeline=STEP, play_state="following" if follow else None),
         collapse_panels=True,
     )

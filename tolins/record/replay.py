@@ -15,6 +15,8 @@ from urllib.parse import quote
 
 from rerun.chunk import RrdReader
 
+from tolins.record.snapshot import cut_recording
+
 LOOPBACK = "127.0.0.1"
 #: Screenshot size in logical points.
 WINDOW_SIZE = "1280x800"
@@ -95,8 +97,18 @@ def _temporary_beside(path: Path) -> Path:
     return path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
 
 
-def take_screenshot(path: Path, out: Path, *, timeout: float = SCREENSHOT_TIMEOUT_S) -> None:
-    """Render ``path`` headless to the PNG ``out`` (written atomically).
+def take_screenshot(
+    path: Path,
+    out: Path,
+    *,
+    step: int | None = None,
+    time: float | None = None,
+    timeout: float = SCREENSHOT_TIMEOUT_S,
+) -> int:
+    """Render ``path`` headless to the PNG ``out`` (written atomically) as it stands at
+    control step ``step`` or simulated time ``time`` (s), by default at its last step;
+    returns the step shown. The viewer renders a copy cut there
+    (:func:`tolins.record.snapshot.cut_recording`: the viewer itself cannot be told a time).
 
     Raises:
         RuntimeError: the viewer could not render (e.g. no Vulkan driver).
@@ -106,8 +118,10 @@ def take_screenshot(path: Path, out: Path, *, timeout: float = SCREENSHOT_TIMEOU
     if not out.parent.is_dir():
         raise ValueError(f"screenshot={str(out)!r}: folder {out.parent} does not exist")
     tmp = _temporary_beside(out)
-    command = [*rerun_command(), *viewer_args(path, screenshot=tmp)]
+    cut = out.with_name(f".{out.stem}.{os.getpid()}.cut.rrd")
     try:
+        shown = cut_recording(path, cut, step=step, time=time)
+        command = [*rerun_command(), *viewer_args(cut, screenshot=tmp)]
         result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
         if result.returncode != 0 or not tmp.is_file():
             lines = [ln for ln in result.stderr.splitlines() if "panicked" in ln or "rror" in ln]
@@ -119,6 +133,8 @@ def take_screenshot(path: Path, out: Path, *, timeout: float = SCREENSHOT_TIMEOU
         os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)
+        cut.unlink(missing_ok=True)
+    return shown
 
 
 def _has_display() -> bool:
@@ -132,17 +148,22 @@ def replay(
     screenshot: str | os.PathLike[str] | None = None,
     web_port: int = 9090,
     grpc_port: int = 9876,
+    step: int | None = None,
+    time: float | None = None,
 ) -> int:
     """Check ``path`` and show it; returns the viewer's exit status.
 
     The native viewer and the web server run until closed (Ctrl-C); a screenshot returns
-    once the PNG is written.
+    once the PNG is written, showing control step ``step`` or simulated time ``time`` (s)
+    (default: the last step).
     """
     path = Path(path)
     check_rrd(path)
     if screenshot is not None:
-        take_screenshot(path, Path(screenshot))
+        take_screenshot(path, Path(screenshot), step=step, time=time)
         return 0
+    if step is not None or time is not None:
+        raise ValueError("step/time pick what a screenshot shows; allowed: with a screenshot")
     if web:
         print(f"web viewer: {web_address(web_port, grpc_port)}  (Ctrl-C to stop)", flush=True)
     elif sys.platform.startswith("linux") and not _has_display():

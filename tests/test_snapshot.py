@@ -1,0 +1,120 @@
+"""A recording cut at one step (what `tolins replay --screenshot --step` renders)."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from rerun.blueprint.components import PlayState
+from rerun.chunk import RrdReader
+
+import tolins  # noqa: F401  (registers the env ids)
+from tolins.cli import main
+from tolins.policies.experts import SafeExpert
+from tolins.record import check_rrd, record_episodes
+from tolins.record.snapshot import cut_recording
+
+
+def _read(path: Path) -> dict[str, dict[str, list]]:
+    """``{entity#static|temporal: {column: values}}``, temporal rows sorted by step."""
+    tables: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
+    for chunk in RrdReader(path).stream():
+        kind = "static" if chunk.is_static else "temporal"
+        for name, values in chunk.to_record_batch().to_pydict().items():
+            tables[f"{chunk.entity_path}#{kind}"][name] += values
+    for table in tables.values():
+        if "step" in table:
+            order = np.argsort(table["step"], kind="stable")
+            for name in table:
+                table[name] = [table[name][i] for i in order]
+    return tables
+
+
+def _vulkan_driver() -> bool:
+    folders = [Path("/usr/share/vulkan/icd.d"), Path("/etc/vulkan/icd.d")]
+    return any(f.is_dir() and any(f.glob("*.json")) for f in folders)
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("rrd") / "circle.rrd"
+    env = gym.make("tolins/Circle2x2-v1", backend="kinematic")
+    record_episodes(env, SafeExpert(), 2, path, seed=0)
+    return path
+
+
+def _temporal(tables: dict) -> dict:
+    return {k: v for k, v in tables.items() if k.endswith("#temporal")}
+
+
+def test_a_cut_keeps_every_row_up_to_the_step_and_nothing_after(recording, tmp_path) -> None:
+    whole = _read(recording)
+    assert cut_recording(recording, tmp_path / "k.rrd", step=10) == 10
+    assert check_rrd(tmp_path / "k.rrd") > 0
+    cut = _read(tmp_path / "k.rrd")
+    assert _temporal(cut).keys() == _temporal(whole).keys()
+    for entity, table in _temporal(whole).items():
+        keep = [i for i, step in enumerate(table["step"]) if step <= 10]
+        for column, values in cut[entity].items():
+            if column != "rerun.controls.RowId":
+                assert values == [table[column][i] for i in keep], (entity, column)
+    static = {k: v for k, v in whole.items() if k.endswith("#static")}
+    assert {k: cut[k] for k in static} == static  # board, pins, metadata, properties
+
+
+def test_a_cut_by_time_and_the_default_cut(recording, tmp_path) -> None:
+    assert cut_recording(recording, tmp_path / "t.rrd", time=2.6) == 10  # 0.25 s per step
+    last = max(max(t["step"]) for t in _temporal(_read(recording)).values())
+    assert cut_recording(recording, tmp_path / "all.rrd") == last
+    assert _read(tmp_path / "all.rrd").keys() == _read(recording).keys()
+
+
+def test_the_cut_opens_following_its_last_step(recording, tmp_path) -> None:
+    cut_recording(recording, tmp_path / "k.rrd", step=5)
+    reader = RrdReader(tmp_path / "k.rrd")
+    (blueprint,) = reader.blueprints()
+    states = [
+        state
+        for chunk in reader.stream(store=blueprint)
+        if chunk.entity_path == "/time_panel"
+        for state in chunk.to_record_batch().to_pydict().get("TimePanelBlueprint:play_state", [])
+    ]
+    assert states == [[PlayState.Following.value]]
+
+
+def test_steps_outside_the_recording_are_refused(recording, tmp_path) -> None:
+    last = max(max(t["step"]) for t in _temporal(_read(recording)).values())
+    with pytest.raises(ValueError, match=rf"allowed: 0 … {last}"):
+        cut_recording(recording, tmp_path / "x.rrd", step=last + 1)
+    with pytest.raises(ValueError, match="allowed: ≥ 0"):
+        cut_recording(recording, tmp_path / "x.rrd", step=-1)
+    with pytest.raises(ValueError, match="at most one"):
+        cut_recording(recording, tmp_path / "x.rrd", step=1, time=1.0)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not _vulkan_driver(), reason="no Vulkan driver for the headless viewer")
+def test_screenshots_show_the_chosen_step(recording, tmp_path) -> None:
+    from PIL import Image
+
+    def scene(name: str, *args: str) -> np.ndarray:
+        shot = tmp_path / f"{name}.png"
+        assert main(["replay", str(recording), "--screenshot", str(shot), *args]) == 0
+        image = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+        height, width, _ = image.shape
+        return image[height // 10 : height * 3 // 4, : width * 3 // 5]  # the 3-D view
+
+    def changed(a: np.ndarray, b: np.ndarray) -> float:
+        return float((np.abs(a - b).max(axis=2) > 30).mean())  # share of pixels changed
+
+    early, late = scene("a", "--step", "2"), scene("b")
+    assert changed(early, late) > 0.02  # the workpiece has moved (measured: 0.037)
+    # Under load the viewer now and then captures before its layout's camera is applied
+    # (seen once in 6 at load 6 on 2 cores): the same step may take a second try.
+    shots = [early, *(scene(f"t{i}", "--time", "0.5") for i in range(2))]
+    same = [changed(shots[i], shots[j]) for i, j in ((0, 1), (0, 2), (1, 2))]
+    assert min(same) < 0.01, same  # 0.5 s is step 2 (measured: 0)
+    assert not list(tmp_path.glob(".*"))  # no cut copy or temporary left

@@ -1,0 +1,93 @@
+"""A copy of a recording cut at one step, so that a screenshot shows that step.
+
+rerun 0.41's viewer has no option to open at a given time, and a blueprint's time panel
+sets the timeline and the play state but not the time; from a file it plays from step 0,
+so a plain screenshot catches whatever step playback had reached. The copy therefore
+ends at the chosen step and its blueprint follows the latest data: the viewer shows the
+last step kept, and the plots up to it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.compute as pc
+import rerun as rr
+from rerun.chunk import Chunk, RrdReader
+
+from tolins.record.geometry import scene_extent
+from tolins.record.layout import STEP, default_blueprint
+from tolins.record.metadata import spec_from_dict
+
+SIM_TIME = "sim_time"
+
+
+def cut_recording(
+    source: str | os.PathLike[str],
+    target: str | os.PathLike[str],
+    *,
+    step: int | None = None,
+    time: float | None = None,
+) -> int:
+    """Write ``source``'s data up to control step ``step`` (or simulated time ``time``, s;
+    neither: all of it) to ``target``, with tolins's layout following the latest data.
+    Returns the last step kept.
+
+    Raises ``ValueError`` when ``step``/``time`` is negative or past the recording's end.
+    """
+    if step is not None and time is not None:
+        raise ValueError("step and time are both set; allowed: at most one")
+    if (step is not None and step < 0) or (time is not None and time < 0):
+        raise ValueError(f"step={step}, time={time}; allowed: ≥ 0")
+    reader = RrdReader(source)
+    (entry,) = reader.recordings()
+    last = {"kept": -1, "all": -1}
+
+    def cut(chunk: Chunk) -> list[Chunk]:
+        if STEP not in chunk.timeline_names:
+            return [chunk]
+        batch = chunk.to_record_batch()
+        steps = batch.column(STEP)
+        last["all"] = max(last["all"], pc.max(steps).as_py())
+        if step is not None:
+            keep = pc.less_equal(steps, step)
+        elif time is not None:
+            limit = pa.scalar(round(time * 1e9), type=pa.duration("ns"))
+            keep = pc.less_equal(batch.column(SIM_TIME), limit)
+        else:
+            keep = pc.greater_equal(steps, 0)
+        kept = batch.filter(keep)
+        if kept.num_rows == 0:
+            return []
+        last["kept"] = max(last["kept"], pc.max(kept.column(STEP)).as_py())
+        return Chunk.from_record_batch(kept)
+
+    chunks = reader.stream().flat_map(cut).to_chunks()
+    if step is not None and step > last["all"]:
+        raise ValueError(f"{source}: step {step} is past its last step; allowed: 0 … {last['all']}")
+    if last["kept"] < 0:
+        raise ValueError(f"{source}: no step at time {time} s; allowed: ≥ 0 s")
+    stream = rr.RecordingStream(
+        entry.application_id, recording_id=entry.recording_id, send_properties=False
+    )
+    stream.save(Path(target), default_blueprint=default_blueprint(_extent(chunks), follow=True))
+    stream.send_chunks(chunks)
+    stream.flush()
+    stream.disconnect()
+    return last["kept"]
+
+
+def _extent(chunks: list[Chunk]) -> float | None:
+    """The scene extent of the nominal spec in the recording's ``tolins`` properties."""
+    for chunk in chunks:
+        if chunk.entity_path == "/__properties/tolins":
+            specs = chunk.to_record_batch().to_pydict().get("spec") or [None]
+            text = specs[0][0] if isinstance(specs[0], list) else specs[0]
+            try:
+                return scene_extent(spec_from_dict(json.loads(text)))
+            except (TypeError, ValueError):
+                return None
+    return None

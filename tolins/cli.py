@@ -215,6 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_train(commands)
     _add_bench(commands)
     _add_evaluate(commands)
+    _add_compare(commands)
     return parser
 
 
@@ -228,6 +229,12 @@ def _add_evaluate(commands: argparse._SubParsersAction) -> None:
     from tolins.bench.cli import add_evaluate_parser
 
     add_evaluate_parser(commands)
+
+
+def _add_compare(commands: argparse._SubParsersAction) -> None:
+    from tolins.bench.compare_cli import add_compare_parser
+
+    add_compare_parser(commands)
 
 
 def _add_train(commands: argparse._SubParsersAction) -> None:

@@ -123,7 +123,12 @@ def test_sb3_algorithm_refuses_other_zips(tmp_path) -> None:
         make_actor(str(path), tolins.CircularSocket(2, 2))
 
 
-def test_evaluate_writes_the_results_schema_and_shows_reference_rows(tmp_path, capsys) -> None:
+def test_evaluate_writes_the_results_schema_and_shows_reference_rows(
+    tmp_path, monkeypatch, capsys
+) -> None:
+    import tolins.bench.reference as reference
+
+    monkeypatch.setattr(reference, "FOLDER", tmp_path / "none shipped")
     bench_like = tmp_path / "bench"
     bench_like.mkdir()
     (bench_like / "results.json").write_text(
@@ -184,3 +189,24 @@ def test_a_module_in_the_current_folder_is_importable(tmp_path, monkeypatch, cap
     argv = ["evaluate", "--policy", "my_agent_for_tolins:Agent", "--env", CIRCLE]
     assert main([*argv, "--episodes", "2", "--backend", "kinematic"]) == 0
     assert "| my_agent_for_tolins:Agent |" in capsys.readouterr().out
+
+
+def test_shipped_references_are_shown_by_default_and_named_with_reference(
+    tmp_path, monkeypatch, capsys
+) -> None:
+    import tolins.bench.reference as reference
+
+    (tmp_path / "quick").mkdir()
+    rows = {"C2.1": {**_bench_row("C2.1", 2), "reward_mean": 12.34}}
+    document = {"schema": SCHEMA, "backend": "kinematic", "rows": rows}
+    (tmp_path / "quick" / "results.json").write_text(json.dumps(document))
+    monkeypatch.setattr(reference, "FOLDER", tmp_path)
+    argv = ["evaluate", "--policy", "safe", "--env", CIRCLE, "--episodes", "2"]
+    assert main([*argv, "--backend", "kinematic"]) == 0
+    printed = capsys.readouterr().out
+    assert "from reference:quick (shipped, kinematic)" in printed and "| 12.34 ± " in printed
+    assert main([*argv, "--backend", "kinematic", "--reference", "reference:quick"]) == 0
+    assert "| C2.1 | π_e^safe | Circle2x2-v1 | 12.34 ± " in capsys.readouterr().out
+    assert main([*argv, "--backend", "kinematic", "--reference", "reference:nope"]) == 2
+    error = capsys.readouterr().err
+    assert "reference:nope: no such reference results" in error and error.count("\n") == 1

@@ -85,7 +85,9 @@ def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
     evaluate.add_argument(
         "--reference",
         metavar="DIR",
-        help="a `tolins bench` results folder whose rows to show (default: the paper's)",
+        help="the rows to show beside it: a `tolins bench` results folder or results.json, "
+        "or reference:NAME (shipped); default: a shipped reference of --backend, else the "
+        "paper's Table 1",
     )
     evaluate.set_defaults(run=_evaluate)
 
@@ -102,7 +104,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 
     name = args.name or args.policy
     try:
-        source, rows = reference_rows(args.env, args.reference)
+        source, rows = reference_rows(args.env, args.reference, backend=args.backend)
         entry = evaluate_policy(
             args.policy, args.env, episodes=args.episodes, backend=args.backend, name=name
         )

@@ -67,15 +67,25 @@ def write_evaluation(out: str | Path, name: str, entry: dict[str, Any], *, backe
 
 
 def reference_rows(
-    env_id: str, reference: str | Path | None = None
+    env_id: str, reference: str | Path | None = None, *, backend: str = "mujoco"
 ) -> tuple[str, dict[str, dict[str, Any]]]:
     """Rows evaluated on ``env_id`` to show beside a scored policy, and where they are from:
-    those of the results folder (or file) ``reference``, else the paper's Table 1."""
+    those of ``reference`` (a results folder or file, or ``reference:NAME`` shipped in
+    :mod:`tolins.bench.reference`); without one, the first shipped reference measured on
+    ``backend`` that has such rows, else the paper's Table 1."""
+    from tolins.bench.reference import PREFIX, reference_names, reference_path
+
     if reference is not None:
-        document = read_results(reference)
+        text = str(reference)
+        path = reference_path(text[len(PREFIX) :]) if text.startswith(PREFIX) else reference
+        document = read_results(path)
         rows = {k: v for k, v in document["rows"].items() if v.get("eval_env") == env_id}
-        source = f"{reference} ({document.get('backend') or 'unknown backend'})"
-        return source, rows
+        return f"{text} ({document.get('backend') or 'unknown backend'})", rows
+    for name in reference_names():
+        document = read_results(reference_path(name))
+        rows = {k: v for k, v in document["rows"].items() if v.get("eval_env") == env_id}
+        if rows and document.get("backend") == backend:
+            return f"{PREFIX}{name} (shipped, {backend})", rows
     rows = {}
     for row in ROWS:
         if row.eval_env == env_id:

@@ -34,7 +34,8 @@ from tolins.bench.statistics import (
 from tolins.bench.table import ROW_IDS, ROWS
 
 CONSISTENT, A_HIGHER, B_HIGHER = "consistent", "differs: A higher", "differs: B higher"
-_TRAINED = frozenset(row.id for row in ROWS if row.trainings)
+#: Rows of a scripted expert: nothing trained, no training variance.
+_EXPERTS = frozenset(row.id for row in ROWS if not row.trainings)
 
 
 @dataclass(frozen=True)
@@ -112,7 +113,7 @@ def _row_difference(row_id: str, a: dict[str, Any], b: dict[str, Any]) -> RowDif
         x, y = _episodes(a), _episodes(b)
     over = SEEDS if over_x == over_y == SEEDS else EPISODES
     interval = difference(x, y, over)
-    trained = 2 if row_id in _TRAINED or row_id not in ROW_IDS else 0
+    trained = 0 if row_id in _EXPERTS else 2  # a row unknown to the table counts as trained
     return RowDifference(row_id, a, b, interval, margin(interval, trained))
 
 

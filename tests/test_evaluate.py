@@ -210,3 +210,14 @@ def test_shipped_references_are_shown_by_default_and_named_with_reference(
     assert main([*argv, "--backend", "kinematic", "--reference", "reference:nope"]) == 2
     error = capsys.readouterr().err
     assert "reference:nope: no such reference results" in error and error.count("\n") == 1
+
+
+def test_a_named_evaluation_lines_up_with_a_bench_row_in_compare(tmp_path, capsys) -> None:
+    argv = ["evaluate", "--env", CIRCLE, "--backend", "kinematic", "--episodes", "10"]
+    for policy in ("safe", "efficient"):
+        out = str(tmp_path / policy)
+        assert main([*argv, "--policy", policy, "--name", "C2.1", "--out", out]) == 0
+    assert "| C2.1 | efficient | Circle2x2-v1 |" in capsys.readouterr().out
+    assert read_results(tmp_path / "safe")["rows"]["C2.1"]["policy"] == "safe"
+    assert main(["compare", str(tmp_path / "safe"), str(tmp_path / "efficient")]) == 0
+    assert "| C2.1 |" in capsys.readouterr().out

@@ -34,8 +34,10 @@ def evaluate_policy(
     ``policy``: a string as ``tolins evaluate --policy`` takes it (an expert name, a tolins
     policy file, an SB3 ``PATH.zip``, ``MODULE:NAME``; :func:`tolins.learning.actors.make_actor`)
     or a Python object following :mod:`tolins.learning.external`'s protocol (a callable
-    ``observation -> action``, or an object with ``predict``/``act``). ``name`` labels the
-    row (default: the string, or the object's type).
+    ``observation -> action``, or an object with ``predict``/``act``). The entry's
+    ``policy`` is that string (or the object's type name); ``name`` is the row's id in
+    :func:`write_evaluation` (e.g. ``C2.3``, to line it up with that bench row in
+    ``tolins compare``).
 
     Raises ``ValueError`` for an unknown env id or backend, a bad episode count or a
     policy that cannot be loaded or returns a malformed action.
@@ -47,15 +49,14 @@ def evaluate_policy(
         raise ValueError(f"backend {backend!r}; allowed: {', '.join(BACKENDS)}")
     if not isinstance(episodes, int) or isinstance(episodes, bool) or episodes < 1:
         raise ValueError(f"episodes={episodes!r}; allowed: an integer ≥ 1")
-    if isinstance(policy, str):
-        entry: Any = policy
-        label = name or policy
-    else:
+    entry: Any = policy
+    text = policy if isinstance(policy, str) else type(policy).__name__
+    if not isinstance(policy, str):
         from tolins.learning.external import as_actor
 
-        label = name or type(policy).__name__
-        entry = as_actor(policy, name=label)
-    row = Row(label, label, "user", env_id, "-")
+        entry = as_actor(policy, name=name or text)
+    label = name or text
+    row = Row(label, text, "user", env_id, "-")
     episodes_run = evaluate(entry, env_id, backend, eval_seeds(0, episodes), policy_name=label)
     return row_entry(row, [episodes_run])
 

@@ -29,7 +29,9 @@ numpy (tested equal to rliable's) and are what the bootstrap evaluates.
 
 rliable draws its resamples from numpy's global RNG; every estimate here seeds it with
 :data:`BOOTSTRAP_SEED` and restores it afterwards (under a lock), so the same data give
-the same interval, in any order, and nobody else's global random stream moves.
+the same interval, in any order, and the caller's global random stream is where it was.
+Another *thread* drawing from that RNG meanwhile (pycma's ``ask`` does) would see the
+seeded stream, so the bench computes intervals only after its stages have finished.
 """
 
 from __future__ import annotations

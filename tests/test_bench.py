@@ -13,7 +13,7 @@ from tolins.bench.config import BenchConfig
 from tolins.bench.results import read_results, row_entry
 from tolins.bench.runner import run_bench
 from tolins.bench.stages import MARKER, StageCache, stage_key
-from tolins.bench.table import PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
+from tolins.bench.table import ALL_ROW_IDS, PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
 from tolins.cli import main
 from tolins.inference.study import METHODS
 from tolins.record import check_rrd
@@ -138,7 +138,7 @@ def _check_outputs(out: Path, backend: str) -> dict:
     assert document["backend"] == backend and document["profile"] == "tiny"
     assert read_results(out) == document
     results = document["rows"]
-    assert list(results) == list(ROW_IDS)
+    assert list(results) == list(ALL_ROW_IDS)  # Table 1, then the deep-RL baselines
     for entry in results.values():
         assert set(entry) >= SCHEMA
         assert entry["episodes"] == 2 and entry["seeds"] == 1
@@ -152,11 +152,11 @@ def _check_outputs(out: Path, backend: str) -> dict:
     study = json.loads((out / "inference.json").read_text())
     assert set(METHODS) == set(study["methods"])
     markdown = (out / "results.md").read_text()
-    assert all(f"| {row_id} |" in markdown for row_id in ROW_IDS)
+    assert all(f"| {row_id} |" in markdown for row_id in ALL_ROW_IDS)
     assert "## The paper's claims in this run" in markdown
-    for name in ("table", "learning_curves", "trajectories", "tolerance_images"):
+    for name in ("table", "learning_curves", "env_step_curves", "trajectories", "tolerance_images"):
         assert (out / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    for row_id in ROW_IDS:
+    for row_id in ALL_ROW_IDS:
         check_rrd(out / "recordings" / f"{row_id}.rrd")
     return results
 
@@ -169,12 +169,13 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
-    assert len(again.cached) == 24  # 8 trainings, 15 evaluations, the study: none ran again
+    # 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study: none ran again
+    assert len(again.cached) == 32
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
     results = json.loads((tmp_path / "results.json").read_text())["rows"]
-    assert list(results) == list(ROW_IDS)
+    assert list(results) == list(ALL_ROW_IDS)
     markdown = (tmp_path / "results.md").read_text()
     assert "## Backends side by side (mujoco vs kinematic)" in markdown
     assert "## Inference study" not in markdown

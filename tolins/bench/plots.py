@@ -48,8 +48,8 @@ def plot_table(
     for axis, figure_name in zip(axes, ("reward", "success"), strict=True):
         ours = [results[r][f"{figure_name}_mean"] for r in rows]
         ours_error = np.array([_error_bar(results[r], figure_name) for r in rows]).T
-        theirs = [paper[r][figure_name][0] for r in rows]
-        theirs_std = [paper[r][figure_name][1] for r in rows]
+        theirs = [paper[r][figure_name][0] if r in paper else np.nan for r in rows]
+        theirs_std = [paper[r][figure_name][1] if r in paper else 0.0 for r in rows]
         label = f"tolins (95 % CI over {over})"
         axis.bar(x - 0.2, ours, 0.4, yerr=ours_error, label=label, capsize=2)
         axis.bar(x + 0.2, theirs, 0.4, yerr=theirs_std, label="paper (± std)", capsize=2, alpha=0.7)
@@ -144,6 +144,23 @@ def plot_learning_curves(path: str | Path, curves: dict[str, list[dict[str, floa
         axis.grid(alpha=0.3)
     axes[2].axhspan(0.4, 0.6, color="tab:green", alpha=0.12)
     axes[0].legend(fontsize=7)
+    return _save(figure, path)
+
+
+def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarray]]) -> Path:
+    """Sparse reward and success rate against env steps, one line per training stage
+    (RS-GAIL's π_n and the deep-RL baselines, :func:`tolins.bench.baselines.env_step_curves`)."""
+    plt = _pyplot()
+    figure, axes = plt.subplots(1, 2, figsize=(12, 3.8), constrained_layout=True)
+    for label, curve in curves.items():
+        style = {"ls": "--"} if label.startswith(("ppo", "sac")) else {}
+        for axis, key in zip(axes, ("reward", "success"), strict=True):
+            axis.plot(curve["env_steps"], curve[key], marker=".", label=label, **style)
+    for axis, name in zip(axes, ("reward (sparse, the paper's)", "success rate"), strict=True):
+        axis.set(xlabel="env steps", ylabel=name)
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    figure.suptitle("RS-GAIL (π_n, from BC) vs PPO and SAC (from scratch) at equal env steps")
     return _save(figure, path)
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
+from tolins.learning.sb3_config import Sb3Config
+from tolins.paper import HORIZON
 
 
 @dataclass(frozen=True)
@@ -25,6 +27,10 @@ class Profile:
         study_samples: Workpieces of the inference study.
         recorded_episodes: Evaluation episodes per row recorded to rerun (first seed).
         sigma0: CMA-ES's initial step size.
+        rl_env_steps: Env steps of each deep-RL baseline (PPO, SAC; rows R1.x);
+            ``None``: :attr:`rs_gail_env_steps`, RS-GAIL's own budget for π_n.
+        rl_reward_mode: The reward the baselines learn from (evaluated with the sparse one).
+        rl_curve_points: Points of each baseline's learning curve.
     """
 
     name: str
@@ -40,6 +46,30 @@ class Profile:
     study_samples: int
     recorded_episodes: int
     sigma0: float = 0.02
+    rl_env_steps: int | None = None
+    rl_reward_mode: str = "dense"
+    rl_curve_points: int = 10
+
+    @property
+    def rs_gail_env_steps(self) -> int:
+        """The most env steps RS-GAIL takes for π_n: per iteration, ``popsize ×
+        candidate_episodes`` candidate episodes and ``curve_episodes`` of the mean, each at
+        most ``HORIZON`` steps (BC's expert demonstrations not counted)."""
+        per_iteration = self.popsize * self.candidate_episodes + self.curve_episodes
+        return self.nominal_iterations * per_iteration * HORIZON
+
+    def sb3(self, algorithm: str, env_id: str, backend: str, seed: int) -> Sb3Config:
+        steps = self.rl_env_steps or self.rs_gail_env_steps
+        return Sb3Config(
+            algorithm,
+            env_id,
+            backend=backend,
+            reward_mode=self.rl_reward_mode,
+            env_steps=steps,
+            curve_every=max(steps // self.rl_curve_points, 1),
+            curve_episodes=self.curve_episodes,
+            seed=seed,
+        )
 
     def task(self, backend: str, expert: str, seed: int) -> TaskConfig:
         return TaskConfig(
@@ -67,9 +97,11 @@ class Profile:
 PROFILES: dict[str, Profile] = {
     # The paper's budgets: 100 RS-GAIL iterations, 100 evaluation episodes, 500 workpieces;
     # 5 training seeds, the unit of the verdicts' intervals (tolins.bench.statistics).
+    # The deep-RL baselines get RS-GAIL's budget for π_n: 100 × (16 × 4 + 8) × 40 = 288,000.
     "paper": Profile("paper", 50, 200, 100, 100, 16, 4, 8, 100, 5, 500, 3),
     # ≤ 15 min on 2 cores: RS-GAIL's reward rises most in its first 20-30 iterations.
-    "quick": Profile("quick", 50, 200, 30, 20, 16, 4, 8, 100, 1, 500, 2),
+    # The baselines get 20,000 env steps each (RS-GAIL's π_n: 86,400): see benchmarks/README.md.
+    "quick": Profile("quick", 50, 200, 30, 20, 16, 4, 8, 100, 1, 500, 2, rl_env_steps=20_000),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
-    "tiny": Profile("tiny", 4, 5, 1, 1, 4, 1, 2, 2, 1, 6, 1),
+    "tiny": Profile("tiny", 4, 5, 1, 1, 4, 1, 2, 2, 1, 6, 1, rl_env_steps=200, rl_curve_points=1),
 }

@@ -13,6 +13,7 @@ import numpy as np
 
 from tolins.atomic import atomic_json, atomic_write
 from tolins.bench import plots
+from tolins.bench.baselines import env_step_curves
 from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
 from tolins.bench.evaluation import FIRST_SEED
@@ -101,6 +102,9 @@ def _figures(run: BenchRun, trainer: Trainer, out: Path) -> list[Path]:
     curves = _learning_curves(run)
     if curves:
         written.append(plots.plot_learning_curves(out / "learning_curves.png", curves))
+    step_curves = env_step_curves(run.stage_folders)
+    if step_curves:
+        written.append(plots.plot_env_step_curves(out / "env_step_curves.png", step_curves))
     trajectories = _training_trajectories(run, trainer)
     if trajectories is not None:
         written.append(trajectories)
@@ -204,8 +208,9 @@ def format_claims(claims: list[ClaimCheck]) -> str:
     caveat), and each pair's difference [95 % CI] and P(better > worse) [95 % CI]."""
     lines = []
     for check in claims:
-        evidence = "; ".join(c.describe() for c in check.comparisons) or "rows not run"
-        lines.append(f"- **{check.claim.statement}: {check.verdict}** ({check.basis}). {evidence}")
+        evidence = "; ".join(c.describe() for c in check.comparisons)
+        line = f"- **{check.claim.statement}: {check.verdict}** ({check.basis})."
+        lines.append(f"{line} {evidence}" if evidence else line)
     return "\n".join(lines)
 
 
@@ -283,6 +288,8 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "## Figures and recordings",
         "",
         "- `learning_curves.png`: RS-GAIL's curves of every trained policy.",
+        "- `env_step_curves.png`: sparse reward against env steps of RS-GAIL's π_n and "
+        "the deep-RL baselines (PPO, SAC; rows R1.x).",
         "- `trajectories.png`: π_n's trajectories over training (the paper's Fig. 4a).",
         "- `tolerance_images.png`: the tolerance images of the workpieces.",
         "- `recordings/{ID}.rrd`: evaluation episodes of each row; "

@@ -19,8 +19,10 @@ class Training:
 
     Attributes:
         name: Stage name, e.g. ``pi_n_safe``.
-        method: ``bc``, ``rs-gail`` (π_n from the BC policy ``upstream``) or
-            ``tolerance-guided`` (φ2 over ``env_ids`` with φ1 from the π_n ``upstream``).
+        method: ``bc``, ``rs-gail`` (π_n from the BC policy ``upstream``),
+            ``tolerance-guided`` (φ2 over ``env_ids`` with φ1 from the π_n ``upstream``), or
+            a deep-RL baseline from scratch, ``ppo`` or ``sac`` (stable-baselines3,
+            :mod:`tolins.learning.sb3`; ``expert`` unused).
         env_ids: Training environments.
         expert: The scripted expert imitated (``safe`` or ``efficient``).
         upstream: The training this one starts from, or ``None``.
@@ -31,6 +33,10 @@ class Training:
     env_ids: tuple[str, ...]
     expert: str
     upstream: str | None = None
+
+
+#: Trainings by stable-baselines3 (deep RL from scratch, beyond the paper).
+SB3_METHODS = ("ppo", "sac")
 
 
 def _chain(suffix: str, env_ids: tuple[str, ...], expert: str) -> tuple[Training, Training]:
@@ -49,6 +55,11 @@ TRAININGS: dict[str, Training] = {
         ),
         *_chain("square", (SQUARE,), "safe"),
         Training("pi_phi_polygon", "tolerance-guided", (SQUARE, HEXAGON), "safe", "pi_n_square"),
+        *(
+            Training(f"{algorithm}_{suffix}", algorithm, (env_id,), "safe")
+            for suffix, env_id in (("circle", CIRCLE_2X2), ("square", SQUARE))
+            for algorithm in SB3_METHODS
+        ),
     )
 }
 
@@ -102,6 +113,18 @@ ROWS: tuple[Row, ...] = (
 )
 ROW_IDS: tuple[str, ...] = tuple(row.id for row in ROWS)
 
+#: Rows beyond the paper (issue 13): deep-RL baselines trained from scratch on the dense
+#: reward within RS-GAIL's env-step budget, evaluated like every row (sparse reward).
+BASELINE_ROWS: tuple[Row, ...] = (
+    Row("R1.1", "PPO", "ppo_circle", CIRCLE_2X2, "2*2"),
+    Row("R1.2", "SAC", "sac_circle", CIRCLE_2X2, "2*2"),
+    Row("R1.3", "PPO", "ppo_square", SQUARE, "square"),
+    Row("R1.4", "SAC", "sac_square", SQUARE, "square"),
+)
+#: Table 1's rows, then the baselines: what ``tolins bench`` runs by default.
+ALL_ROWS: tuple[Row, ...] = ROWS + BASELINE_ROWS
+ALL_ROW_IDS: tuple[str, ...] = tuple(row.id for row in ALL_ROWS)
+
 #: Table 1 of the paper: (mean, std) of reward, success rate, steps, collisions.
 PAPER: dict[str, dict[str, tuple[float, float]]] = {
     row_id: dict(zip(("reward", "success", "steps", "collisions"), pairs, strict=True))
@@ -126,11 +149,13 @@ PAPER: dict[str, dict[str, tuple[float, float]]] = {
 
 
 def select_rows(ids: str | list[str] | None) -> list[Row]:
-    """The rows named in ``ids`` (comma-separated or a list; ``None``: all), in table order."""
+    """The rows named in ``ids`` (comma-separated or a list; ``None``: all, baselines
+    included), in table order."""
     if ids is None:
-        return list(ROWS)
+        return list(ALL_ROWS)
     wanted = [i.strip() for i in ids.split(",")] if isinstance(ids, str) else list(ids)
-    unknown = [i for i in wanted if i not in ROW_IDS]
+    unknown = [i for i in wanted if i not in ALL_ROW_IDS]
     if unknown or not wanted:
-        raise ValueError(f"rows {unknown or wanted!r} are unknown; allowed: {', '.join(ROW_IDS)}")
-    return [row for row in ROWS if row.id in wanted]
+        allowed = ", ".join(ALL_ROW_IDS)
+        raise ValueError(f"rows {unknown or wanted!r} are unknown; allowed: {allowed}")
+    return [row for row in ALL_ROWS if row.id in wanted]

@@ -1,0 +1,114 @@
+"""Deep-RL baselines: the SB3 wrappers, budgets in env steps, training runs and their rows."""
+
+from __future__ import annotations
+
+import csv
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3.common.env_checker import check_env
+
+import tolins
+from tolins.bench.baselines import env_step_curves
+from tolins.bench.claims import CLAIMS
+from tolins.bench.profiles import PROFILES
+from tolins.bench.table import BASELINE_ROWS, ROW_IDS, SB3_METHODS, select_rows
+from tolins.envs.wrappers import agent_env
+from tolins.learning.actors import make_actor
+from tolins.learning.sb3 import OBSERVATION_SCALE, make_model, train_sb3
+from tolins.learning.sb3_config import CURVES, MODEL, Sb3Config
+from tolins.paper import A_MAX, HORIZON
+
+CIRCLE = "tolins/Circle2x2-v1"
+
+
+def test_agent_env_rescales_actions_and_casts_observations() -> None:
+    env = agent_env(CIRCLE, backend="kinematic")
+    check_env(env)  # SB3's checker: no warning-worthy space left
+    assert np.array_equal(env.action_space.low, -np.ones(4))
+    assert env.observation_space.dtype == np.float32
+    raw = gym.make(CIRCLE, backend="kinematic", measurement_noise=0)
+    wrapped = agent_env(raw)
+    wrapped.reset(seed=1)
+    *_, info = wrapped.step(np.array([1.0, -1.0, 0.0, -1.0]))
+    # One full-speed step moves the pose by a_max · dt along each commanded axis.
+    start = gym.make(CIRCLE, backend="kinematic").reset(seed=1)[1]["pose"]
+    assert np.allclose(info["pose"] - start, np.array([1, -1, 0, -1]) * A_MAX * 0.25)
+    with pytest.raises(ValueError, match="allowed: an env id"):
+        agent_env(raw, backend="mujoco")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"algorithm": "dqn"}, "algorithm='dqn'; allowed: ppo, sac"),
+        ({"reward_mode": "shaped"}, "reward_mode='shaped'"),
+        ({"env_steps": 0}, "env_steps"),
+        ({"seed": -1}, "seed"),
+    ],
+)
+def test_bad_sb3_configs_raise(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        Sb3Config(**{"algorithm": "ppo", "env_id": CIRCLE, **kwargs})
+
+
+def test_budgets_are_env_steps_and_the_paper_profile_matches_rs_gail() -> None:
+    paper, quick = PROFILES["paper"], PROFILES["quick"]
+    per_iteration = paper.popsize * paper.candidate_episodes + paper.curve_episodes
+    assert paper.rs_gail_env_steps == paper.nominal_iterations * per_iteration * HORIZON
+    for algorithm in SB3_METHODS:
+        config = paper.sb3(algorithm, CIRCLE, "mujoco", 2)
+        assert config.env_steps >= paper.rs_gail_env_steps
+        assert config.reward_mode == "dense" and config.seed == 2
+        assert quick.sb3(algorithm, CIRCLE, "mujoco", 0).env_steps < config.env_steps
+
+
+def test_baseline_rows_are_beyond_the_paper_and_run_by_default() -> None:
+    ids = [row.id for row in BASELINE_ROWS]
+    assert all(i.startswith("R1.") for i in ids) and not set(ids) & set(ROW_IDS)
+    assert [row.id for row in select_rows(None)][-len(ids) :] == ids
+    assert [row.id for row in select_rows("R1.2,C2.3")] == ["C2.3", "R1.2"]
+    for row in BASELINE_ROWS:
+        (training,) = row.trainings
+        assert training.method in SB3_METHODS and training.env_ids == (row.eval_env,)
+    claim = next(c for c in CLAIMS if c.name == "rs_gail_vs_deep_rl")
+    assert {worse for _, worse in claim.pairs} == set(ids)
+
+
+def test_the_observation_scale_is_inside_the_saved_policy() -> None:
+    model = make_model(Sb3Config("sac", CIRCLE, backend="kinematic", env_steps=10))
+    extractor = model.policy.actor.features_extractor
+    observation = np.arange(8, dtype=np.float32)[None]
+    import torch
+
+    features = extractor(torch.as_tensor(observation)).numpy()
+    assert np.allclose(features, observation * OBSERVATION_SCALE)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("algorithm", SB3_METHODS)
+def test_a_short_run_writes_a_model_the_bench_can_evaluate_and_its_curve(
+    tmp_path, algorithm: str
+) -> None:
+    config = Sb3Config(
+        algorithm, CIRCLE, backend="kinematic", env_steps=1200, curve_every=600, curve_episodes=2
+    )
+    history = train_sb3(config, tmp_path)
+    with open(tmp_path / CURVES) as file:
+        rows = list(csv.DictReader(file))
+    # PPO learns on whole rollouts of 2048 steps: its one point is past the budget.
+    assert len(rows) == len(history) == (2 if algorithm == "sac" else 1)
+    assert [float(r["env_steps"]) for r in rows] == [h["env_steps"] for h in history]
+    assert history[-1]["env_steps"] >= 1200
+    actor = make_actor(str(tmp_path / MODEL), tolins.CircularSocket(2, 2))
+    from stable_baselines3 import PPO, SAC
+
+    model = {"ppo": PPO, "sac": SAC}[algorithm].load(tmp_path / MODEL, device="cpu")
+    observation = gym.make(CIRCLE, backend="kinematic").reset(seed=4)[0]
+    expected = model.predict(observation.astype(np.float32), deterministic=True)[0] * A_MAX
+    assert np.allclose(actor(observation), expected, atol=1e-6)
+    curves = env_step_curves({f"{algorithm}_circle-seed0": tmp_path, "bc_safe-seed0": tmp_path})
+    assert list(curves) == [f"{algorithm}_circle-seed0"]
+    steps = curves[f"{algorithm}_circle-seed0"]["env_steps"]
+    assert np.array_equal(steps, [h["env_steps"] for h in history])

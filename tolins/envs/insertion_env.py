@@ -85,18 +85,18 @@ class InsertionEnv(gym.Env):
     * ``"sparse"`` (default, the paper's, Table 1): ``reward_success + reward_collision``,
       ``c (1 - k / k_max)`` with c = 100 on the step ``k`` (1-based) that succeeds, and
       -1 on every step with a collision.
-    * ``"dense"``: sparse plus four shaping terms of the true pose, each ≤ 0 and 0 only
-      once every pin is ``success_depth`` deep in its hole (so no term pays for hovering,
-      pushing on the board or leaving it, and success always beats staying in the episode):
-      ``reward_approach = -min(d / 5 mm, 1)`` (``d``: mean horizontal distance of the pins
-      to their holes; a polygon peg's vertices, theta modulo its symmetry);
-      ``reward_height = -clip(z, 0, 20 mm) / 20 mm`` (pin tips over the board's top);
-      ``reward_alignment = -0.5 min(u, 1)``, ``u`` the share of the clearance used (0
-      centred, 1 on the tolerance's boundary: -0.5 unless every pin is over its own
-      hole); ``reward_depth = -0.5 (1 - aligned · clip(-z, 0,
-      success_depth) / success_depth)`` (insertion depth, counted only while aligned).
+    * ``"dense"``: sparse plus four shaping terms of the true pose, each ≤ 0 and near 0
+      only once every pin is ``success_depth`` deep in its hole, centred (so no term pays
+      for hovering, pushing on the board or leaving it, and success always beats staying
+      in the episode): ``reward_approach = -min(d / 5 mm, 1)`` (``d``: mean horizontal
+      distance of the pins to their holes; a polygon peg's vertices, theta modulo its
+      symmetry); ``reward_height = -clip(z, 0, 20 mm) / 20 mm`` (pin tips over the board's
+      top); ``reward_alignment = -u / (1 + u)``, ``u`` the share of the clearance used (0
+      centred, ``u ≤ 1`` exactly when every pin is over its own hole);
+      ``reward_depth = -0.5 (1 - aligned · clip(-z, 0, success_depth) / success_depth)``
+      (insertion depth, counted only while aligned).
     * ``"normalized_dense"``: the dense reward mapped affinely onto [0, 1]:
-      ``(r - lo) / (hi - lo)``, ``lo = -3 - 1``, ``hi = c``; each term is scaled and
+      ``(r - lo) / (hi - lo)``, ``lo = -3.5 - 1``, ``hi = c``; each term is scaled and
       ``reward_offset`` holds the shift. With success ending the episode the shift is a
       small per-step bonus for staying in it; learn with ``dense``.
 

@@ -2,18 +2,19 @@
 
 Pure functions of the true pose ``[x, y, theta, z]``, the episode's socket and the task's
 settings. ``sparse`` is the paper's reward. ``dense`` adds four shaping terms to it, each
-≤ 0 and 0 only once every pin is ``success_depth`` deep in its hole, so that no term pays
-for hovering, for pushing on the board or for leaving the board, and ending the episode
-by success is always worth more than any way of staying in it:
+≤ 0 and near 0 only once every pin is ``success_depth`` deep in its hole, centred, so that
+no term pays for hovering, for pushing on the board or for leaving the board, and ending
+the episode by success is always worth more than any way of staying in it:
 
 * ``reward_approach`` = ``-w_a · min(d / 5 mm, 1)``, ``d`` the mean horizontal distance of
   the workpiece's key points to their targets (circles: each pin centre to its hole's;
   polygons: each peg vertex to its place in the hole, theta modulo the symmetry).
 * ``reward_height`` = ``-w_h · clip(z, 0, 20 mm) / 20 mm``: the pin tips' height over the
   board; nothing more is paid below the board's top.
-* ``reward_alignment`` = ``-w_l · min(u, 1)``, ``u`` the use of the clearance
-  (:func:`clearance_use`: 0 centred, 1 on the tolerance's boundary, so ``-w_l`` whenever
-  some pin is not over its own hole, :func:`tolins.geometry.tolerance.contains`).
+* ``reward_alignment`` = ``-w_l · u / (1 + u)``, ``u`` the use of the clearance
+  (:func:`clearance_use`: 0 centred, ``u ≤ 1`` exactly when every pin is over its own
+  hole, :func:`tolins.geometry.tolerance.contains`; ``-w_l / 2`` on the boundary). It
+  does not saturate, so a rotation far outside the tolerance still has a gradient.
 * ``reward_depth`` = ``-w_d · (1 - aligned · clip(-z, 0, success_depth) / success_depth)``:
   insertion depth, counted only while aligned.
 
@@ -45,7 +46,7 @@ class DenseWeights:
 
     approach: float = 1.0
     height: float = 1.0
-    alignment: float = 0.5
+    alignment: float = 1.0
     depth: float = 0.5
 
     @property
@@ -135,11 +136,12 @@ def shaping_terms(
     """The dense shaping terms (``approach``, ``height``, ``alignment``, ``depth``) of ``pose``."""
     z = float(pose[3])
     aligned = is_aligned(socket, pose)
+    use = clearance_use(socket, pose)
     depth = min(max(-z, 0.0), success_depth) / success_depth if aligned else 0.0
     return {
         "approach": -weights.approach * min(approach_distance(socket, pose) / APPROACH_SCALE, 1.0),
         "height": -weights.height * min(max(z, 0.0), HEIGHT_SCALE) / HEIGHT_SCALE,
-        "alignment": -weights.alignment * (min(clearance_use(socket, pose), 1.0)),
+        "alignment": -weights.alignment * use / (1.0 + use),
         "depth": -weights.depth * (1.0 - depth),
     }
 

@@ -78,7 +78,7 @@ def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]])
     plt = _pyplot()
     pairs = check.comparisons
     rows = list(dict.fromkeys(row for c in pairs for row in (c.better, c.worse)))
-    height = 0.9 + 0.42 * max(len(rows), len(pairs))
+    height = 1.5 + 0.42 * max(len(rows), len(pairs))
     figure, axes = plt.subplots(1, 3, figsize=(13, height), constrained_layout=True)
     colours = {"held": "tab:green", "did not hold": "tab:red", "inconclusive": "tab:grey"}
     row_bars = [(r, results[r]["reward_mean"], *results[r]["reward_ci"], "tab:blue") for r in rows]
@@ -107,6 +107,9 @@ def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]])
         (difference, "difference of mean reward", 0.0),
         (improvement, "probability of improvement", 0.5),
     )
+    for i, pair in enumerate(pairs):  # one training seed: the margin a CI must clear
+        if pair.margin:
+            axes[1].barh(i, 2 * pair.margin, 0.95, left=-pair.margin, color="grey", alpha=0.15)
     for axis, (bars, title, reference) in zip(axes, panels, strict=True):
         for i, (_, estimate, low, high, colour) in enumerate(bars):
             axis.barh(i, high - low, 0.6, left=low, color=colour, alpha=0.75)
@@ -114,15 +117,17 @@ def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]])
             axis.vlines(estimate, i - 0.28, i + 0.22, color="black", alpha=0.6)
         if reference is not None:
             axis.axvline(reference, color="black", lw=0.8, ls="--")
+        left, right = axis.get_xlim()  # room around the bars, and the reference line inside
+        if reference is not None:
+            left, right = min(left, reference), max(right, reference)
+        pad = 0.08 * (right - left) or 0.5
+        axis.set_xlim(left - pad, right + pad)
         axis.set_yticks(range(len(bars)), [b[0] for b in bars])
         axis.invert_yaxis()
         axis.set_title(title)
         axis.grid(axis="x", alpha=0.25)
         for side in ("top", "right"):
             axis.spines[side].set_visible(False)
-    for i, pair in enumerate(pairs):  # one training seed: the margin a CI must clear
-        if pair.margin:
-            axes[1].barh(i, 2 * pair.margin, 0.95, left=-pair.margin, color="grey", alpha=0.15)
     axes[2].set_xlim(-0.02, 1.02)
     title = f"{check.claim.statement}: {check.verdict} ({check.basis})"
     figure.suptitle("\n".join(textwrap.wrap(title, 150)), fontsize=9)

@@ -4,7 +4,9 @@ the results.json schema and the errors of `tolins evaluate`."""
 from __future__ import annotations
 
 import json
+import re
 import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -14,6 +16,7 @@ import tolins
 from tolins.bench import evaluate_policy
 from tolins.bench.evaluation import eval_seeds, evaluate_row
 from tolins.bench.results import SCHEMA, read_results, row_entry
+from tolins.bench.scoring import write_evaluation
 from tolins.bench.table import ROWS
 from tolins.cli import main
 from tolins.learning.actors import make_actor
@@ -221,3 +224,15 @@ def test_a_named_evaluation_lines_up_with_a_bench_row_in_compare(tmp_path, capsy
     assert read_results(tmp_path / "safe")["rows"]["C2.1"]["policy"] == "safe"
     assert main(["compare", str(tmp_path / "safe"), str(tmp_path / "efficient")]) == 0
     assert "| C2.1 |" in capsys.readouterr().out
+
+
+def test_docs_benchmark_md_names_every_field_of_the_results_schema(tmp_path) -> None:
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "benchmark.md").read_text()
+    section = doc.split("## `results.json`: schema `tolins.results/1`", 1)[1].split("\n## ")[0]
+    named = set(re.findall(r"`([a-z_]+)`", section))
+    for braces in re.findall(r"`\{([a-z_,]+)\}(_[a-z_]+)`", section):
+        named |= {f"{figure}{braces[1]}" for figure in braces[0].split(",")}
+    entry = evaluate_policy("safe", CIRCLE, episodes=2, backend="kinematic")
+    document = read_results(write_evaluation(tmp_path, "safe", entry, backend="kinematic"))
+    assert set(document) - named == set()
+    assert set(entry) - named == set()

@@ -103,20 +103,24 @@ def train_sb3(
     ``overrides``: keywords of the SB3 algorithm (for experiments)."""
     out = Path(out)
     model = make_model(config, **overrides)
-    began, history = time.perf_counter(), []
+    began, learning_s, history = time.perf_counter(), 0.0, []
     with single_threaded_torch():
         while model.num_timesteps < config.env_steps:
             chunk = min(config.curve_every, config.env_steps - model.num_timesteps)
+            start = time.perf_counter()
             model.learn(chunk, reset_num_timesteps=model.num_timesteps == 0)
+            learning_s += time.perf_counter() - start
             trained = model.num_timesteps  # PPO ends on whole rollouts: may pass the chunk
             row = {"point": len(history), "env_steps": trained, **curve_point(model, config)}
+            row["train_steps_per_s"] = trained / learning_s
             row["wall_s"] = time.perf_counter() - began
             history.append(row)
             write_curves_csv(out / CURVES, history)
             if log is not None:
                 log(
-                    f"{config.algorithm} {trained} steps: reward {row['reward']:.2f}, "
-                    f"success {row['success']:.2f}"
+                    f"{config.algorithm} {trained} steps ({row['train_steps_per_s']:.0f} steps/s "
+                    f"training): reward {row['reward']:.2f}, success {row['success']:.2f}, "
+                    f"collisions {row['collisions']:.2f}"
                 )
     atomic_write(out / MODEL, model.save)
     return history

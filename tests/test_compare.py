@@ -52,6 +52,7 @@ def test_claims_of_a_real_run_follow_the_intervals_in_its_results_json(runs):
     assert {name: c["verdict"] for name, c in recorded.items()} == {
         name: c.verdict for name, c in checks.items()
     }
+    assert read_results(three)["claims"] == recorded  # results.json carries them too
     guided = checks["tolerance_guided"]
     assert [checks[n].verdict for n in ("rs_gail", "inference", "polygon_transfer")] == [
         NOT_EVALUATED

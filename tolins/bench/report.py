@@ -32,6 +32,7 @@ def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
     document = results_document(
         run.results, source="bench", backend=backend, profile=run.config.profile
     )
+    document["claims"] = {check.claim.name: check.to_json() for check in run.claims}
     written = [
         atomic_json(out / "results.json", document),
         atomic_json(out / f"results.{backend}.json", document),

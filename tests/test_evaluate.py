@@ -236,3 +236,17 @@ def test_docs_benchmark_md_names_every_field_of_the_results_schema(tmp_path) -> 
     document = read_results(write_evaluation(tmp_path, "safe", entry, backend="kinematic"))
     assert set(document) - named == set()
     assert set(entry) - named == set()
+
+
+@pytest.mark.slow
+def test_the_folder_of_a_real_tolins_train_run_scores_as_its_policy(tmp_path, capsys) -> None:
+    out = tmp_path / "bc"
+    argv = ["train", "bc", "--env", "tolins/Square-v1", "--backend", "kinematic"]
+    assert main([*argv, "--demonstrations", "4", "--epochs", "2", "--out", str(out)]) == 0
+    by_folder = evaluate_policy(str(out), "tolins/Square-v1", episodes=2, backend="kinematic")
+    by_file = evaluate_policy(
+        str(out / "policy.pt"), "tolins/Square-v1", episodes=2, backend="kinematic"
+    )
+    assert _figures(by_folder) == _figures(by_file)
+    assert main(["evaluate", "--policy", str(tmp_path), "--env", CIRCLE]) == 2  # no policy.pt
+    assert "a folder without policy.pt" in capsys.readouterr().err

@@ -11,19 +11,22 @@ from tolins.geometry.specs import SocketSpec
 from tolins.learning.policy import load_policy
 from tolins.policies import EXPERTS
 
+#: The policy file in the folder of a ``tolins train`` run.
+POLICY_FILE = "policy.pt"
 #: What :func:`make_actor` accepts, for error messages and help texts.
 ALLOWED = (
-    "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes), "
+    "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes, or "
+    "its --out folder), "
     "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act)"
 )
 
 
 def make_actor(entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndarray]:
     """The policy ``entry``: an expert by name (``safe``, ``efficient``); a policy file
-    saved by ``tolins train`` (``PATH`` or ``NAME=PATH``; a tolerance-guided policy gets
-    the embedding of ``socket``); a stable-baselines3 model (``PATH.zip``,
-    :func:`tolins.learning.external.load_sb3`); or ``MODULE:NAME``
-    (:func:`tolins.learning.external.import_policy`).
+    saved by ``tolins train`` (``PATH`` or ``NAME=PATH``; ``PATH`` may be the run's folder,
+    holding ``policy.pt``; a tolerance-guided policy gets the embedding of ``socket``); a
+    stable-baselines3 model (``PATH.zip``, :func:`tolins.learning.external.load_sb3`); or
+    ``MODULE:NAME`` (:func:`tolins.learning.external.import_policy`).
 
     Raises ``ValueError`` (one line: what was wrong, what is allowed).
     """
@@ -31,6 +34,8 @@ def make_actor(entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndar
         return EXPERTS[entry]()
     name, sep, rest = entry.partition("=")
     path = Path(rest if sep and name.isidentifier() else entry)
+    if path.is_dir() and (path / POLICY_FILE).is_file():
+        path = path / POLICY_FILE
     if path.suffix == ".zip" or path.is_file():
         if not path.is_file():
             raise ValueError(f"policy {entry!r}: no such file {str(path)!r}")
@@ -43,6 +48,8 @@ def make_actor(entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndar
         from tolins.learning.external import import_policy
 
         return import_policy(entry)
+    if path.is_dir():
+        raise ValueError(f"policy {entry!r}: a folder without {POLICY_FILE}; allowed: {ALLOWED}")
     missing = f"no such file {str(path)!r}" if path.suffix or "/" in entry else "unknown"
     raise ValueError(f"policy {entry!r}: {missing}; allowed: {ALLOWED}")
 

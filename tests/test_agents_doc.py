@@ -39,3 +39,20 @@ def test_the_other_python_code_of_the_doc_runs() -> None:
     assert others
     for block in others:
         exec(compile(block, str(DOC), "exec"), {"__name__": "agents_doc"})
+
+
+def test_the_reward_modes_and_terms_the_doc_names_are_the_envs() -> None:
+    import gymnasium as gym
+
+    import tolins  # noqa: F401
+    from tolins.envs.reward import REWARD_MODES
+
+    section = DOC.read_text().split("## Reward modes", 1)[1].split("\n## ", 1)[0]
+    modes = re.findall(r'^- `"([a-z_]+)"`', section, flags=re.MULTILINE)
+    assert tuple(modes) == REWARD_MODES
+    env = gym.make("tolins/Square-v1", backend="kinematic", reward_mode="dense")
+    env.reset(seed=0)
+    _, reward, *_, info = env.step(env.action_space.sample())
+    terms = {key for key in info if key.startswith("reward_")}
+    assert terms == set(re.findall(r"`(reward_[a-z]+)`", section))
+    assert abs(sum(info[key] for key in terms) - reward) < 1e-9

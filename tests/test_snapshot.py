@@ -118,3 +118,18 @@ def test_screenshots_show_the_chosen_step(recording, tmp_path) -> None:
     same = [changed(shots[i], shots[j]) for i, j in ((0, 1), (0, 2), (1, 2))]
     assert min(same) < 0.01, same  # 0.5 s is step 2 (measured: 0)
     assert not list(tmp_path.glob(".*"))  # no cut copy or temporary left
+
+
+def test_a_recording_without_steps_is_copied_whole_and_refuses_a_step(tmp_path) -> None:
+    import rerun as rr
+
+    path = tmp_path / "other.rrd"
+    stream = rr.RecordingStream("other")
+    stream.save(path)
+    stream.log("points", rr.Points3D([[0.0, 0.0, 0.0]]), static=True)
+    stream.flush()
+    stream.disconnect()
+    assert cut_recording(path, tmp_path / "copy.rrd") == 0
+    assert check_rrd(tmp_path / "copy.rrd") > 0
+    with pytest.raises(ValueError, match="no 'step' timeline"):
+        cut_recording(path, tmp_path / "x.rrd", step=0)

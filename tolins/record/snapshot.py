@@ -36,7 +36,8 @@ def cut_recording(
     neither: all of it) to ``target``, with tolins's layout following the latest data.
     Returns the last step kept.
 
-    Raises ``ValueError`` when ``step``/``time`` is negative or past the recording's end.
+    Raises ``ValueError`` when ``step``/``time`` is negative or past the recording's end,
+    or given for a recording without tolins's ``step`` timeline.
     """
     if step is not None and time is not None:
         raise ValueError("step and time are both set; allowed: at most one")
@@ -66,10 +67,10 @@ def cut_recording(
         return Chunk.from_record_batch(kept)
 
     chunks = reader.stream().flat_map(cut).to_chunks()
+    if last["all"] < 0 and (step is not None or time is not None):
+        raise ValueError(f"{source}: no {STEP!r} timeline; allowed: a recording made by tolins")
     if step is not None and step > last["all"]:
         raise ValueError(f"{source}: step {step} is past its last step; allowed: 0 … {last['all']}")
-    if last["kept"] < 0:
-        raise ValueError(f"{source}: no step at time {time} s; allowed: ≥ 0 s")
     stream = rr.RecordingStream(
         entry.application_id, recording_id=entry.recording_id, send_properties=False
     )
@@ -77,7 +78,7 @@ def cut_recording(
     stream.send_chunks(chunks)
     stream.flush()
     stream.disconnect()
-    return last["kept"]
+    return max(last["kept"], 0)
 
 
 def _extent(chunks: list[Chunk]) -> float | None:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from tolins.bench.config import BACKENDS, BenchConfig
+from tolins.bench.executor import EXECUTORS
 from tolins.bench.profiles import PROFILES
 from tolins.cli_checks import fail, output_folder, positive_int
 
@@ -33,6 +34,18 @@ def add_bench_parser(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--out", help="output folder (default: results/PROFILE)")
     bench.add_argument("--workers", type=positive_int, default=2, help="evaluation threads")
     bench.add_argument("--no-study", action="store_true", help="skip the inference study")
+    bench.add_argument(
+        "--executor",
+        default="local",
+        choices=EXECUTORS,
+        help="where stages run: local (this process) or ray (Ray tasks; pip install "
+        "'tolins[ray]'); results are identical",
+    )
+    bench.add_argument(
+        "--address",
+        help="with --executor ray: auto or HOST:PORT of a running Ray cluster "
+        "(default: start Ray on this machine)",
+    )
     bench.set_defaults(run=_run)
 
 
@@ -47,6 +60,8 @@ def _run(args: argparse.Namespace) -> int:
             out=str(out),
             study=not args.no_study,
             workers=args.workers,
+            executor=args.executor,
+            address=args.address,
         )
     except ValueError as error:  # OptionError too
         return fail("tolins bench", error)

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from tolins.bench.claims import ClaimCheck
+from tolins.bench.executor import EXECUTORS, check_address
 from tolins.bench.profiles import PROFILES, Profile
 from tolins.bench.table import select_rows
 
@@ -27,6 +28,10 @@ class BenchConfig:
         out: Output folder.
         study: Run the inference study.
         workers: Threads evaluating rows side by side (results do not depend on it).
+        executor: ``local`` (this process) or ``ray`` (Ray tasks; ``tolins[ray]``): where
+            the stages run (:mod:`tolins.bench.executor`; results do not depend on it).
+        address: With ``ray``: ``None`` starts Ray on this machine, ``auto`` or
+            ``HOST:PORT`` connects to a running cluster.
     """
 
     profile: str = "quick"
@@ -36,6 +41,8 @@ class BenchConfig:
     out: str = "bench"
     study: bool = True
     workers: int = 2
+    executor: str = "local"
+    address: str | None = None
 
     def __post_init__(self) -> None:
         if self.profile not in PROFILES:
@@ -46,6 +53,11 @@ class BenchConfig:
             raise ValueError(f"seeds={self.seeds!r}; allowed: an integer ≥ 1")
         if not isinstance(self.workers, int) or self.workers < 1:
             raise ValueError(f"workers={self.workers!r}; allowed: an integer ≥ 1")
+        if self.executor not in EXECUTORS:
+            raise ValueError(f"executor={self.executor!r}; allowed: {', '.join(EXECUTORS)}")
+        if self.address is not None and self.executor != "ray":
+            raise ValueError(f"address={self.address!r} needs executor='ray' (--executor ray)")
+        check_address(self.address)
         select_rows(self.rows)  # raises on unknown ids
 
 
@@ -62,3 +74,6 @@ class BenchRun:
     stage_wall_s: dict[str, float] = field(default_factory=dict)
     cached: list[str] = field(default_factory=list)
     stage_folders: dict[str, Path] = field(default_factory=dict)
+    stage_times: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """Per stage: ``started``/``finished`` (Unix time), ``wall_s``, ``cached``, and where it
+    ran (``host``, ``pid``; ``node``: the Ray node id or ``None``; ``thread``)."""

@@ -2,8 +2,11 @@
 
 Stages (all cached by config hash under ``DIR/stages``, see :mod:`.stages`): the trainings
 each selected row needs, once per training seed (:mod:`.training`); one evaluation per
-row and seed (:mod:`.evaluation`); the inference study. Then the reports: every file in
-``DIR`` is rewritten from the finished stages (:mod:`.report`).
+row and seed (:mod:`.evaluation`); the inference study. The stages that have not finished
+run as jobs of an executor (:mod:`.executor`: this process, or Ray tasks on a cluster),
+each after the stage it needs. Then the reports: every file in ``DIR`` is rewritten from
+the finished stages (:mod:`.report`), and ``timeline.png`` shows when and where each
+stage ran (:mod:`.timeline`).
 """
 
 from __future__ import annotations
@@ -11,7 +14,6 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -27,21 +29,23 @@ from tolins.bench.evaluation import (
     eval_seeds,
     evaluate_row,
 )
+from tolins.bench.executor import Job, make_executor
 from tolins.bench.profiles import PROFILES, Profile
 from tolins.bench.report import write_reports
 from tolins.bench.results import row_entry
 from tolins.bench.stages import StageCache
-from tolins.bench.table import Row, select_rows
-from tolins.bench.training import Trainer
+from tolins.bench.table import TRAININGS, Row, select_rows
+from tolins.bench.timeline import write_timeline
+from tolins.bench.training import Trainer, train_stage
 from tolins.rollout import Episode
+
+STUDY = "inference.json"
 
 
 def run_bench(
     config: BenchConfig, *, progress: bool = True, log: Callable[[str], None] = tqdm.write
 ) -> BenchRun:
     """Run (or resume) the benchmark and write every report into ``config.out``."""
-    from tolins.learning.artefacts import single_threaded_torch
-
     began = time.perf_counter()
     profile = PROFILES[config.profile]
     seeds = config.seeds or profile.seeds
@@ -50,60 +54,191 @@ def run_bench(
     cache = StageCache(out)
     trainer = Trainer(cache, profile, config.backend, progress=progress, log=log)
     run = BenchRun(config, profile, {}, [], None, 0.0)
-    policies: dict[tuple[str, int], Path] = {}
-    for seed in range(seeds):
-        for row in rows:
-            for training in row.trainings:
-                if (training.name, seed) not in policies:
-                    policies[training.name, seed] = trainer.policy(training.name, seed)
-    run.stage_wall_s.update(trainer.wall_s)
-    run.cached += trainer.cached
-    for name, seed in policies:
-        run.stage_folders[trainer.stage_name(name, seed)] = policies[name, seed].parent
-
-    jobs = [(row, seed) for row in rows for seed in range(seeds)]
-    bar = tqdm(total=len(jobs), desc="evaluate", unit="row×seed", disable=not progress)
-
-    def evaluate(job: tuple[Row, int]) -> list[Episode]:
-        row, seed = job
-        policy = policies.get((row.agent, seed))
-        episodes = _evaluation_stage(cache, run, row, seed, policy, profile, config.backend)
-        bar.update()
-        return episodes
-
-    with single_threaded_torch(), ThreadPoolExecutor(config.workers) as pool:
-        per_job = dict(zip(jobs, pool.map(evaluate, jobs), strict=True))
-    bar.close()
+    executor = make_executor(
+        config.executor, workers=config.workers, address=config.address, shared=cache.root
+    )
+    cache.root.mkdir(parents=True, exist_ok=True)
+    try:
+        local = executor.name == "local"
+        plan = _Plan(cache)
+        pool = executor.candidate_pool()
+        _plan_trainings(plan, trainer, rows, seeds, pool, progress and local, log)
+        _plan_evaluations(plan, trainer, rows, seeds)
+        if config.study:
+            workers = 2 if local else 1  # a Ray task holds one CPU
+            args = (out, profile, config.backend, workers, progress and local)
+            plan.add(
+                "inference-study",
+                _study_config(profile, config.backend),
+                study_stage,
+                args,
+                takes_upstream=False,
+            )
+        bar = tqdm(total=len(rows) * seeds, desc="evaluate", unit="row×seed", disable=not progress)
+        bar.update(sum(name.startswith("eval-") for name in plan.done))
+        plan.done.update(
+            executor.run(
+                plan.jobs,
+                on_start=lambda job: _log_start(job, plan, log),
+                on_done=lambda job, result: _log_done(job, result, cache, log, bar),
+            )
+        )
+        bar.close()
+        run.stage_times = _stage_times(plan, cache, executor.placement)
+    finally:
+        executor.close()
+    for name, value in plan.done.items():
+        folder = value.parent if name in plan.trainings else value
+        run.stage_folders[name] = folder
+        run.stage_wall_s[name] = cache.wall_s(folder)
+    run.cached += [name for name in plan.done if name in plan.cached]
     for row in rows:
-        run.results[row.id] = row_entry(row, [per_job[row, seed] for seed in range(seeds)])
+        per_seed = [_episodes(run.stage_folders[f"eval-{row.id}-seed{s}"]) for s in range(seeds)]
+        run.results[row.id] = row_entry(row, per_seed)
     run.claims = check_claims(run.results)
     if config.study:
-        run.study = _study_stage(cache, run, profile, config.backend, log, progress)
+        run.study = json.loads((run.stage_folders["inference-study"] / STUDY).read_text())
     run.wall_s = time.perf_counter() - began
     write_reports(run, trainer, seeds)
+    write_timeline(out, run)
     return run
 
 
-def _evaluation_stage(
-    cache: StageCache,
-    run: BenchRun,
-    row: Row,
-    seed: int,
-    policy: Path | None,
-    profile: Profile,
-    backend: str,
-) -> list[Episode]:
+class _Plan:
+    """The stages of a run: finished ones (``done``: name -> result) and jobs to run."""
+
+    def __init__(self, cache: StageCache) -> None:
+        self.cache = cache
+        self.done: dict[str, Path] = {}
+        self.cached: set[str] = set()
+        self.jobs: list[Job] = []
+        self.trainings: dict[str, str] = {}  # stage -> its log line
+        self._names: set[str] = set()
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._names
+
+    def add(
+        self,
+        name: str,
+        config: dict[str, Any],
+        fn: Callable[..., Path],
+        args: tuple,
+        upstream: str | None = None,
+        *,
+        side_by_side: bool = False,
+        result: str | None = None,
+        takes_upstream: bool = True,
+    ) -> None:
+        """Stage ``name``: finished (its ``result`` file, or folder) or a job of ``fn(*args,
+        upstream's result)`` (``upstream``: an earlier stage name, or ``None`` passed as
+        such; nothing with ``takes_upstream=False``)."""
+        self._names.add(name)
+        if self.cache.finished(name, config):
+            folder = self.cache.folder(name, config)
+            self.done[name] = folder if result is None else folder / result
+            self.cached.add(name)
+            return
+        deps: tuple[str, ...] = ()
+        if not takes_upstream:
+            pass
+        elif upstream is None or upstream in self.done:
+            args = (*args, None if upstream is None else self.done[upstream])
+        else:
+            deps = (upstream,)
+        self.jobs.append(Job(name, fn, args, deps, side_by_side))
+
+
+def _plan_trainings(
+    plan: _Plan,
+    trainer: Trainer,
+    rows: list[Row],
+    seeds: int,
+    pool: Any,
+    progress: bool,
+    log: Callable[[str], None],
+) -> None:
+    cache, profile, backend = trainer.cache, trainer.profile, trainer.backend
+    for seed in range(seeds):
+        for row in rows:
+            for training in row.trainings:  # upstream first
+                stage = trainer.stage_name(training.name, seed)
+                if stage in plan:
+                    continue
+                up = training.upstream
+                plan.trainings[stage] = f"{training.method} on {', '.join(training.env_ids)}"
+                plan.add(
+                    stage,
+                    trainer.config(training.name, seed),
+                    train_stage,
+                    (cache.root.parent, profile, backend, training.name, seed, pool, progress),
+                    None if up is None else trainer.stage_name(up, seed),
+                    result=trainer.policy_file(training.name),
+                )
+                if stage in plan.cached:
+                    log(f"{stage}: cached ({trainer.cache.wall_s(plan.done[stage].parent):.0f} s)")
+
+
+def _plan_evaluations(plan: _Plan, trainer: Trainer, rows: list[Row], seeds: int) -> None:
+    cache, profile, backend = trainer.cache, trainer.profile, trainer.backend
+    for row in rows:
+        for seed in range(seeds):
+            training = row.agent if row.agent in TRAININGS else None
+            upstream = None if training is None else trainer.stage_name(training, seed)
+            policy_stage = None
+            if training is not None:
+                policy_stage = cache.folder(upstream, trainer.config(training, seed)).name
+            plan.add(
+                f"eval-{row.id}-seed{seed}",
+                _evaluation_config(row, seed, policy_stage, profile, backend),
+                evaluation_stage,
+                (cache.root.parent, row, seed, profile, backend),
+                upstream,
+                side_by_side=True,
+            )
+
+
+def _log_start(job: Job, plan: _Plan, log: Callable[[str], None]) -> None:
+    if job.name in plan.trainings:
+        log(f"training {job.name} ({plan.trainings[job.name]})")
+    elif job.name == "inference-study":
+        profile, backend = job.args[1], job.args[2]
+        source = "MuJoCo contacts" if backend == "mujoco" else "the tolerance model"
+        log(f"inference study: {profile.study_samples} workpieces, outcomes from {source}")
+
+
+def _log_done(
+    job: Job, result: Path, cache: StageCache, log: Callable[[str], None], bar: tqdm
+) -> None:
+    if job.name.startswith("eval-"):
+        bar.update()
+    elif job.name != "inference-study":
+        log(f"{job.name}: trained ({cache.wall_s(result.parent):.0f} s)")
+
+
+def _evaluation_config(
+    row: Row, seed: int, policy_stage: str | None, profile: Profile, backend: str
+) -> dict[str, Any]:
     import tolins
 
-    recorded = profile.recorded_episodes if seed == 0 else 0
-    config = {
+    return {
         "row": asdict(row),
         "backend": backend,
         "seeds": eval_seeds(seed, profile.eval_episodes),
-        "recorded": recorded,
-        "policy_stage": None if policy is None else policy.parent.name,
+        "recorded": profile.recorded_episodes if seed == 0 else 0,
+        "policy_stage": policy_stage,
         "tolins_version": tolins.__version__,
     }
+
+
+def evaluation_stage(
+    root: Path, row: Row, seed: int, profile: Profile, backend: str, policy: Path | None
+) -> Path:
+    """A job of :mod:`tolins.bench.executor`: ``row``'s evaluation for training seed
+    ``seed`` (``policy``: its trained ``policy.pt``, ``None`` for an expert); its folder."""
+    policy_stage = None if policy is None else policy.parent.name
+    config = _evaluation_config(row, seed, policy_stage, profile, backend)
+    recorded = config["recorded"]
 
     def build(folder: Path) -> None:
         record = folder / RECORDING if recorded else None
@@ -112,46 +247,60 @@ def _evaluation_stage(
         )
         atomic_json(folder / EPISODES, episodes_to_json(episodes))
 
-    name = f"eval-{row.id}-seed{seed}"
-    folder, cached = cache.run(name, config, build)
-    run.stage_wall_s[name] = cache.wall_s(folder)
-    run.stage_folders[name] = folder
-    if cached:
-        run.cached.append(name)
+    return StageCache(root).run(f"eval-{row.id}-seed{seed}", config, build)[0]
+
+
+def _episodes(folder: Path) -> list[Episode]:
     return episodes_from_json(json.loads((folder / EPISODES).read_text()))
 
 
-def _study_stage(
-    cache: StageCache,
-    run: BenchRun,
-    profile: Profile,
-    backend: str,
-    log: Callable[[str], None],
-    progress: bool,
-) -> dict[str, Any]:
-    """The inference study (MuJoCo outcomes on the mujoco backend, the tolerance model on
-    the kinematic one); its JSON in the issue's schema."""
-    import tolins
-    from tolins.inference.report import save_plot, write_json
-    from tolins.inference.study import StudyConfig, run_study
+def _study(profile: Profile, backend: str, workers: int = 2):
+    from tolins.inference.study import StudyConfig
 
-    study = StudyConfig(
-        samples=profile.study_samples, seed=0, workers=2, physics=backend == "mujoco"
+    return StudyConfig(
+        samples=profile.study_samples, seed=0, workers=workers, physics=backend == "mujoco"
     )
-    config = {**asdict(study), "tolins_version": tolins.__version__}
-    config.pop("workers")
+
+
+def _study_config(profile: Profile, backend: str) -> dict[str, Any]:
+    import tolins
+
+    config = {**asdict(_study(profile, backend)), "tolins_version": tolins.__version__}
+    config.pop("workers")  # results do not depend on it
+    return config
+
+
+def study_stage(root: Path, profile: Profile, backend: str, workers: int, progress: bool) -> Path:
+    """A job of :mod:`tolins.bench.executor`: the inference study (MuJoCo outcomes on the
+    mujoco backend, the tolerance model on the kinematic one) on ``workers`` processes;
+    its folder, with its JSON in the issue's schema."""
+    from tolins.inference.report import save_plot, write_json
+    from tolins.inference.study import run_study
+
+    study = _study(profile, backend, workers)
 
     def build(folder: Path) -> None:
-        source = "MuJoCo contacts" if study.physics else "the tolerance model"
-        log(f"inference study: {study.samples} workpieces, outcomes from {source}")
         with tqdm(total=study.samples, desc="inference study", disable=not progress) as bar:
             result = run_study(study, on_workpiece=lambda _: bar.update())
         save_plot(result, folder / "inference_study.png")
-        write_json(result, folder / "inference.json")
+        write_json(result, folder / STUDY)
 
-    folder, cached = cache.run("inference-study", config, build)
-    run.stage_wall_s["inference-study"] = cache.wall_s(folder)
-    run.stage_folders["inference-study"] = folder
-    if cached:
-        run.cached.append("inference-study")
-    return json.loads((folder / "inference.json").read_text())
+    return StageCache(root).run("inference-study", _study_config(profile, backend), build)[0]
+
+
+def _stage_times(
+    plan: _Plan, cache: StageCache, placement: dict[str, dict[str, Any]]
+) -> dict[str, dict[str, Any]]:
+    """When and where each stage ran (from its marker and the executor), and if cached."""
+    times = {}
+    for name, value in plan.done.items():
+        marker = cache.record(value.parent if name in plan.trainings else value)
+        times[name] = {
+            "started": marker.get("started"),
+            "finished": marker.get("finished"),
+            "wall_s": marker["wall_s"],
+            "cached": name in plan.cached,
+            **{"host": marker.get("host"), "pid": marker.get("pid")},
+            **placement.get(name, {}),
+        }
+    return times

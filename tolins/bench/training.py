@@ -5,11 +5,34 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tolins.bench.profiles import Profile
 from tolins.bench.stages import StageCache, stage_key
-from tolins.bench.table import TRAININGS, Training
+from tolins.bench.table import SB3_METHODS, TRAININGS, Training
+
+if TYPE_CHECKING:
+    from tolins.learning.pool import CandidatePool
+
+
+def train_stage(
+    root: Path,
+    profile: Profile,
+    backend: str,
+    name: str,
+    seed: int,
+    pool: CandidatePool | None,
+    progress: bool,
+    upstream: Path | None,
+) -> Path:
+    """A job of :mod:`tolins.bench.executor`: :meth:`Trainer.train` in the cache under
+    ``root`` (RS-GAIL's progress bars if ``progress``, no log lines); ``policy.pt``."""
+    trainer = Trainer(StageCache(root), profile, backend, progress=progress, log=_silent)
+    return trainer.train(name, seed, upstream, pool)[0]
+
+
+def _silent(_: str) -> None:
+    pass
 
 
 class Trainer:
@@ -50,6 +73,10 @@ class Trainer:
         }
         if training.upstream is not None:
             config["upstream"] = stage_key(self.config(training.upstream, seed))
+        if training.method in SB3_METHODS:
+            config.pop("task")  # no expert, no demonstrations
+            config["sb3"] = asdict(self._sb3(training, seed))
+            return config
         if training.method == "bc":
             config["bc"] = asdict(self.profile.bc())
         else:
@@ -71,22 +98,53 @@ class Trainer:
         training = TRAININGS[name]
         upstream = None if training.upstream is None else self.policy(training.upstream, seed)
         stage = self.stage_name(name, seed)
-        config = self.config(name, seed)
-        if not self.cache.finished(stage, config):
+        if not self.cache.finished(stage, self.config(name, seed)):
             self.log(f"training {stage} ({training.method} on {', '.join(training.env_ids)})")
-        folder, cached = self.cache.run(
-            stage, config, lambda out: self._train(training, seed, out, upstream)
-        )
-        self.wall_s[stage] = self.cache.wall_s(folder)
+        self._done[name, seed], cached = self.train(name, seed, upstream)
+        self.wall_s[stage] = self.cache.wall_s(self._done[name, seed].parent)
         if cached:
             self.cached.append(stage)
         self.log(f"{stage}: {'cached' if cached else 'trained'} ({self.wall_s[stage]:.0f} s)")
-        self._done[name, seed] = folder / "policy.pt"
         return self._done[name, seed]
 
-    def _train(self, training: Training, seed: int, out: Path, upstream: Path | None) -> None:
+    def train(
+        self, name: str, seed: int, upstream: Path | None, pool: CandidatePool | None = None
+    ) -> tuple[Path, bool]:
+        """Train ``name`` with ``seed`` from the ``upstream`` policy file unless its stage
+        has finished; its ``policy.pt`` and whether it was cached. RS-GAIL's candidates run
+        on ``pool`` (default: threads)."""
+        training = TRAININGS[name]
+        folder, cached = self.cache.run(
+            self.stage_name(name, seed),
+            self.config(name, seed),
+            lambda out: self._train(training, seed, out, upstream, pool),
+        )
+        return folder / self.policy_file(name), cached
+
+    def policy_file(self, name: str) -> str:
+        """The file of a finished stage of training ``name`` that holds its policy."""
+        from tolins.learning.sb3_config import MODEL
+
+        return MODEL if TRAININGS[name].method in SB3_METHODS else "policy.pt"
+
+    def _sb3(self, training: Training, seed: int):
+        return self.profile.sb3(training.method, training.env_ids[0], self.backend, seed)
+
+    def _train(
+        self,
+        training: Training,
+        seed: int,
+        out: Path,
+        upstream: Path | None,
+        pool: CandidatePool | None,
+    ) -> None:
         from tolins.learning import runs
 
+        if training.method in SB3_METHODS:
+            from tolins.learning.sb3 import train_sb3
+
+            train_sb3(self._sb3(training, seed), out)
+            return
         task = self.profile.task(self.backend, training.expert, seed)
         env_ids = list(training.env_ids)
         if training.method == "bc":
@@ -101,6 +159,7 @@ class Trainer:
                 init=str(upstream),
                 resume=True,
                 progress=self.progress,
+                pool=pool,
             )
         else:
             runs.run_tolerance_guided(
@@ -112,4 +171,5 @@ class Trainer:
                 nominal=str(upstream),
                 resume=True,
                 progress=self.progress,
+                pool=pool,
             )

@@ -23,7 +23,9 @@ could not learn an n × n matrix from 100 × 16 samples; the diagonal adapts one
 per weight, which is what so few samples support (docs/learning.md).
 
 Reproducibility: every candidate's episode is seeded from (seed, iteration, candidate,
-episode) and runs in its own env, so the result does not depend on ``workers``. pycma
+episode) and a reset makes it independent of the env's earlier episodes, so the result
+does not depend on ``workers`` nor on the pool (threads or Ray actors,
+:mod:`tolins.learning.pool`). pycma
 samples from a private ``RandomState`` (its ``randn`` option; numpy's global RNG is left
 alone), pickled with the strategy into the checkpoint after every iteration, beside D
 and its optimiser: ``resume=True`` continues an interrupted run to the identical result.
@@ -31,11 +33,11 @@ and its optimiser: ``resume=True`` continues an interrupted run to the identical
 
 from __future__ import annotations
 
+import contextlib
 import io
 import pickle
 import time
-from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,10 +49,11 @@ from tqdm import tqdm
 
 from tolins.learning.artefacts import atomic_torch_save, load_payload, single_threaded_torch
 from tolins.learning.curves import write_curves_csv
-from tolins.learning.demonstrations import Rollout, make_env, pairs, rollout
+from tolins.learning.demonstrations import Rollout, pairs
 from tolins.learning.discriminator import Discriminator
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import RSGailConfig
+from tolins.learning.pool import CandidatePool, EnvCache, ThreadPool, policy_rollouts
 
 CHECKPOINT = "checkpoint.pt"
 FORMAT = "tolins.rs_gail_run/1"
@@ -93,23 +96,24 @@ class _Rollouts:
         self.workpieces, self.backend = workpieces, backend
 
     def run(self, policy: Policy, seeds: list[int]) -> list[Rollout]:
-        envs: dict[str, Any] = {}
-        episodes = []
-        for e, seed in enumerate(seeds):
-            piece = self.workpieces[e % len(self.workpieces)]
-            if piece.env_id not in envs:
-                envs[piece.env_id] = make_env(piece.env_id, self.backend)
-            episodes.append(rollout(envs[piece.env_id], policy.bind(piece.embedding), seed))
-        for env in envs.values():
-            env.close()
-        return episodes
+        envs = EnvCache(self.backend)
+        try:
+            return policy_rollouts(envs, policy, self.workpieces, seeds)
+        finally:
+            envs.close()
 
-    def candidate(
-        self, policy: Policy, flat: np.ndarray, key: tuple[int, int, int], config: RSGailConfig
-    ) -> list[Rollout]:
-        """The episodes of one CMA-ES candidate, seeded from (seed, iteration, candidate, e)."""
-        seeds = [episode_seed(*key, e) for e in range(config.episodes)]
-        return self.run(policy.with_flat(flat), seeds)
+
+@contextlib.contextmanager
+def _candidate_pool(pool: CandidatePool | None, workers: int) -> Iterator[CandidatePool]:
+    """``pool``, or a :class:`ThreadPool` of ``workers`` threads closed after the block."""
+    if pool is not None:
+        yield pool
+        return
+    own = ThreadPool(workers)
+    try:
+        yield own
+    finally:
+        own.close()
 
 
 def _objective(episodes: list[Rollout], discriminator: Discriminator, alpha: float) -> float:
@@ -158,9 +162,12 @@ def train_rs_gail(
     resume: bool = False,
     progress: bool = True,
     on_iteration: Callable[[int, dict[str, float]], None] | None = None,
+    pool: CandidatePool | None = None,
 ) -> RSGailResult:
     """Run RS-GAIL from ``policy`` (its trainable part is searched), writing
-    ``out/checkpoint.pt`` and ``out/curves.csv`` after every iteration."""
+    ``out/checkpoint.pt`` and ``out/curves.csv`` after every iteration. The candidates'
+    episodes run on ``pool`` (default: a :class:`~tolins.learning.pool.ThreadPool` of
+    ``config.workers`` threads); the result does not depend on it."""
     out = Path(out)
     path = out / CHECKPOINT
     runner = _Rollouts(workpieces, backend)
@@ -177,7 +184,7 @@ def train_rs_gail(
     eval_seeds = [episode_seed(seed, _EVAL, e) for e in range(config.eval_episodes)]
     stopped = "iterations"
     bar = tqdm(total=config.iterations, initial=start, desc="RS-GAIL", disable=not progress)
-    with single_threaded_torch(), ThreadPoolExecutor(max_workers=config.workers) as pool:
+    with single_threaded_torch(), _candidate_pool(pool, config.workers) as candidate_pool:
         for i in range(start, config.iterations):
             began = time.perf_counter()
             alpha = config.alpha_at(i)
@@ -188,9 +195,11 @@ def train_rs_gail(
                 discriminator.update(expert_pairs, pairs(current), config.discriminator_steps)
             candidates = es.ask()
 
-            keys = [(seed, i, c) for c in range(len(candidates))]
-            jobs = zip(candidates, keys, strict=True)
-            episodes = list(pool.map(lambda job: runner.candidate(policy, *job, config), jobs))
+            seeds = [
+                [episode_seed(seed, i, c, e) for e in range(config.episodes)]
+                for c in range(len(candidates))
+            ]
+            episodes = candidate_pool.rollouts(policy, workpieces, backend, candidates, seeds)
             fitness = [_objective(e, discriminator, alpha) for e in episodes]
             es.tell(candidates, [-f for f in fitness])
             row = _row(i, alpha, current, discriminator, fitness, es, episodes, began)

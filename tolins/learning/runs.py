@@ -20,6 +20,7 @@ from tolins.learning.curves import plot_curves, write_curves_csv
 from tolins.learning.demonstrations import Rollout, collect
 from tolins.learning.policy import load_policy, save_policy
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
+from tolins.learning.pool import CandidatePool
 from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
 from tolins.learning.tolerance_guided import train_tolerance_guided, workpieces
 
@@ -64,6 +65,7 @@ def run_rs_gail(
     init: str | None = None,
     resume: bool = False,
     progress: bool = True,
+    pool: CandidatePool | None = None,
 ) -> RSGailResult:
     """π_n: RS-GAIL from the BC policy ``init`` (or one cloned here with ``bc``)."""
     out = Path(out)
@@ -85,6 +87,7 @@ def run_rs_gail(
         metadata=metadata,
         resume=resume,
         progress=progress,
+        pool=pool,
     )
     _finish(out, result, metadata, f"RS-GAIL on {env_id}")
     return result
@@ -100,6 +103,7 @@ def run_tolerance_guided(
     nominal: str,
     resume: bool = False,
     progress: bool = True,
+    pool: CandidatePool | None = None,
 ) -> RSGailResult:
     """π_φ: φ2 by RS-GAIL over ``env_ids`` with φ1 from the nominal policy file ``nominal``."""
     out = Path(out)
@@ -124,6 +128,7 @@ def run_tolerance_guided(
         metadata=metadata,
         resume=resume,
         progress=progress,
+        pool=pool,
     )
     _finish(out, result, metadata, f"tolerance-guided on {', '.join(env_ids)}")
     return result

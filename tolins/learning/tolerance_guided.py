@@ -13,6 +13,7 @@ import numpy as np
 from tolins.learning.demonstrations import Rollout
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import ResidualConfig, RSGailConfig
+from tolins.learning.pool import CandidatePool
 from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
 
 
@@ -43,6 +44,7 @@ def train_tolerance_guided(
     metadata: dict[str, Any],
     resume: bool = False,
     progress: bool = True,
+    pool: CandidatePool | None = None,
 ) -> RSGailResult:
     """π_φ from ``nominal`` (φ1, frozen) with φ2 searched by RS-GAIL on ``pieces``; the
     episodes of each candidate cycle through the workpieces."""
@@ -60,4 +62,5 @@ def train_tolerance_guided(
         metadata=metadata,
         resume=resume,
         progress=progress,
+        pool=pool,
     )

@@ -1,0 +1,266 @@
+"""The Ray executor (``tolins bench --executor ray``) and RS-GAIL on Ray actors: results
+identical to the local executor's, on a local Ray instance and on a two-node cluster that
+the test starts on 127.0.0.1 (and stops: it ends the two ``ray start --block`` processes
+it started, which take their raylets, GCS and workers with them)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import ray
+
+from tolins.bench.config import BenchConfig
+from tolins.bench.runner import run_bench
+from tolins.cli import main
+from tolins.learning.bc import behaviour_clone
+from tolins.learning.demonstrations import collect, rollout
+from tolins.learning.policy_config import BCConfig, RSGailConfig
+from tolins.learning.pool import EnvCache, ThreadPool
+from tolins.learning.ray_pool import RayPool
+from tolins.learning.rs_gail import Workpiece, train_rs_gail
+from tolins.policies import EXPERTS
+
+RAY_ENV = {"RAY_USAGE_STATS_ENABLED": "0", "RAY_AUTH_MODE": "disabled"}
+OBJECT_STORE = 200 * 2**20
+ROWS = "C1.1,C2.3,C3.2"  # an expert, π_n (BC -> RS-GAIL) and π_φ (-> tolerance-guided)
+RAY_BIN = str(Path(sys.executable).parent / "ray")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def ray_environment():
+    before = {k: os.environ.get(k) for k in RAY_ENV}
+    os.environ.update(RAY_ENV)
+    yield
+    for key, value in before.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    """A Ray instance in this process with 2 CPUs."""
+    ray.init(
+        num_cpus=2,
+        include_dashboard=False,
+        object_store_memory=OBJECT_STORE,
+        configure_logging=False,
+        log_to_driver=False,
+    )
+    yield
+    ray.shutdown()
+
+
+def _bench(out: Path, **kwargs) -> BenchConfig:
+    return BenchConfig(profile="tiny", rows=ROWS, backend="kinematic", out=str(out), **kwargs)
+
+
+def _outputs(out: Path) -> tuple[dict, dict | None]:
+    rows = json.loads((out / "results.json").read_text())["rows"]
+    study = out / "inference.json"
+    return rows, json.loads(study.read_text()) if study.exists() else None
+
+
+@pytest.fixture(scope="module")
+def local_outputs(tmp_path_factory):
+    out = tmp_path_factory.mktemp("local")
+    run_bench(_bench(out), progress=False, log=lambda _: None)
+    return _outputs(out)
+
+
+def test_an_env_kept_between_episodes_gives_a_fresh_envs_episodes():
+    for env_id in ("tolins/Circle2x2-v1", "tolins/Circle2x1Defective-v1"):
+        kept = EnvCache("mujoco")
+        for seed in (3, 4):
+            rollout(kept.get(env_id), EXPERTS["safe"](), seed)
+        again = rollout(kept.get(env_id), EXPERTS["efficient"](), 5)
+        fresh = EnvCache("mujoco")
+        first = rollout(fresh.get(env_id), EXPERTS["efficient"](), 5)
+        assert np.array_equal(again.observations, first.observations), env_id
+        assert (again.reward, again.collisions) == (first.reward, first.collisions)
+        assert kept.env_ids == [env_id]
+        kept.close()
+        fresh.close()
+
+
+def test_rs_gail_on_ray_actors_searches_exactly_as_on_threads(local_ray, tmp_path):
+    env = "tolins/Circle2x2-v1"
+    demos = collect(env, "efficient", 4, seed=0, backend="mujoco")
+    policy = behaviour_clone(demos, BCConfig(epochs=5), seed=0).policy
+    config = RSGailConfig(iterations=2, popsize=4, episodes=2, eval_episodes=2, sigma0=0.05)
+    pools = {"threads": ThreadPool(2), "ray": RayPool.start()}
+    results = {}
+    for name, pool in pools.items():
+        results[name] = train_rs_gail(
+            policy.with_flat(policy.get_flat()),
+            [Workpiece(env)],
+            demos,
+            config,
+            seed=0,
+            backend="mujoco",
+            out=tmp_path / name,
+            metadata={},
+            progress=False,
+            pool=pool,
+        )
+    figures = {
+        n: [{k: v for k, v in row.items() if k != "wall_s"} for row in r.history]
+        for n, r in results.items()
+    }
+    assert figures["ray"] == figures["threads"]
+    assert np.array_equal(results["ray"].means, results["threads"].means)
+    assert results["ray"].final == results["threads"].final
+    kept = ray.get([w.env_ids.remote() for w in pools["ray"].workers])
+    assert [("mujoco", env)] in kept  # the actors keep their envs between iterations
+    assert len(pools["ray"].workers) == 2  # one per CPU
+    pools["threads"].close()
+    pools["ray"].shutdown()
+
+
+@pytest.mark.slow
+def test_ray_executor_gives_the_local_executors_results(local_ray, local_outputs, tmp_path):
+    run = run_bench(_bench(tmp_path, executor="ray"), progress=False, log=lambda _: None)
+    assert _outputs(tmp_path) == local_outputs
+    stages = json.loads((tmp_path / "run.json").read_text())["stages"]
+    assert set(stages) == set(run.stage_times)
+    assert len(stages) == 7  # 3 trainings (bc_safe, pi_n_safe, pi_phi_circle), 3 evals, study
+    assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
+    assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def _alive_nodes(address: str) -> int:
+    code = (
+        f"import ray; ray.init(address={address!r}, configure_logging=False, "
+        "log_to_driver=False); print(sum(n['Alive'] for n in ray.nodes()))"
+    )
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, timeout=30
+        )
+    except subprocess.TimeoutExpired:
+        return 0
+    return int(done.stdout.strip() or 0)
+
+
+def _wait_for_nodes(address: str, nodes: int, started: list[subprocess.Popen]) -> None:
+    deadline = time.monotonic() + 90
+    while _alive_nodes(address) < nodes:
+        failed = [p.args for p in started if p.poll() is not None]
+        assert not failed, f"ray start exited: {failed}"
+        assert time.monotonic() < deadline, f"{nodes} Ray node(s) did not come up"
+        time.sleep(1)
+
+
+@pytest.fixture()
+def two_nodes():
+    """A head and a worker node (1 CPU each) on 127.0.0.1; their address."""
+    port = _free_port()
+    address = f"127.0.0.1:{port}"
+    temp = tempfile.mkdtemp(prefix="tolins-ray-")  # short: Ray's socket paths have a limit
+    common = ["--num-cpus=1", "--node-ip-address=127.0.0.1", "--block"]
+    common += [f"--object-store-memory={OBJECT_STORE}", f"--temp-dir={temp}"]
+    head = [RAY_BIN, "start", "--head", f"--port={port}", "--include-dashboard=false"]
+    env = {**os.environ, **RAY_ENV}
+    quiet = {"env": env, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    started = [subprocess.Popen([*head, *common], **quiet)]
+    try:
+        _wait_for_nodes(address, 1, started)
+        started.append(
+            subprocess.Popen([RAY_BIN, "start", f"--address={address}", *common], **quiet)
+        )
+        _wait_for_nodes(address, 2, started)
+        yield address
+    finally:
+        for process in reversed(started):
+            process.send_signal(signal.SIGTERM)
+            try:
+                process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                process.kill()
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+@pytest.mark.slow
+def test_a_two_node_cluster_gives_the_local_executors_results(two_nodes, local_outputs, tmp_path):
+    command = [
+        str(Path(sys.executable).parent / "tolins"),
+        "bench",
+        "--profile",
+        "tiny",
+        "--rows",
+        ROWS,
+    ]
+    command += ["--backend", "kinematic", "--out", str(tmp_path), "--executor", "ray"]
+    done = subprocess.run(
+        [*command, "--address", two_nodes],
+        env={**os.environ, **RAY_ENV},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert _outputs(tmp_path) == local_outputs
+    stages = json.loads((tmp_path / "run.json").read_text())["stages"]
+    assert len({s["node"] for s in stages.values()}) == 2  # both nodes ran stages
+
+
+def _bench_cli(tmp_path, *options: str) -> list[str]:
+    return ["bench", "--profile", "tiny", "--rows", "C1.1", "--out", str(tmp_path), *options]
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (("--address", "auto"), "needs executor='ray' (--executor ray)"),
+        (("--executor", "ray", "--address", "head"), "allowed: auto"),
+        (("--executor", "ray", "--address", "127.0.0.1:0"), "allowed: auto"),
+    ],
+)
+def test_bad_executor_options_are_refused_with_what_is_allowed(tmp_path, capsys, options, message):
+    assert main(_bench_cli(tmp_path, *options)) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_an_address_without_a_ray_head_says_so(tmp_path, capsys):
+    assert (
+        main(_bench_cli(tmp_path, "--executor", "ray", "--address", f"127.0.0.1:{_free_port()}"))
+        == 2
+    )
+    assert "no Ray head answers there" in capsys.readouterr().err
+    assert not (tmp_path / "stages").exists()
+
+
+def test_the_ray_executor_without_ray_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
+    assert main(_bench_cli(tmp_path, "--executor", "ray")) == 2
+    assert "pip install 'tolins[ray]'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_local_executor_runs_without_importing_ray(tmp_path):
+    code = (
+        "import sys; from tolins.cli import main;"
+        f"code = main(['bench', '--profile', 'tiny', '--rows', 'C1.1', '--backend', "
+        f"'kinematic', '--no-study', '--out', {str(tmp_path)!r}]);"
+        "assert code == 0, code; assert 'ray' not in sys.modules"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]

@@ -1,0 +1,105 @@
+"""RS-GAIL's candidate episodes on Ray actors (``pip install 'tolins[ray]'``).
+
+:meth:`RayPool.start` places one :class:`RolloutWorker` actor on every CPU of every node
+of the connected cluster; each keeps its envs between calls (and between trainings).
+The actors reserve no CPU (``num_cpus=0``, pinned to their node): the stage tasks that
+drive them hold the CPUs, and they mostly wait on the actors. Any number of trainings
+share the actors through :class:`RayPool`, which sends one candidate at a time to each
+idle actor (``ray.util.ActorPool``) and returns the episodes in the candidates' order.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from tolins.learning.demonstrations import Rollout
+from tolins.learning.pool import EnvCache, candidate_rollouts
+
+
+class RolloutWorker:
+    """The state of one actor: envs by backend, kept between calls."""
+
+    def __init__(self) -> None:
+        import torch
+
+        torch.set_num_threads(1)  # as the thread pool runs its candidates
+        self._envs: dict[str, EnvCache] = {}
+
+    def candidate(
+        self,
+        policy: Any,
+        workpieces: Sequence[Any],
+        backend: str,
+        flat: np.ndarray,
+        seeds: Sequence[int],
+    ) -> list[Rollout]:
+        """:func:`tolins.learning.pool.candidate_rollouts` in this actor's envs."""
+        envs = self._envs.setdefault(backend, EnvCache(backend))
+        flat = np.array(flat)  # a writable copy: Ray hands arrays out read-only
+        return candidate_rollouts(envs, policy, workpieces, flat, seeds)
+
+    def env_ids(self) -> list[tuple[str, str]]:
+        """``(backend, env id)`` of every env this actor keeps."""
+        return [(b, e) for b, cache in self._envs.items() for e in cache.env_ids]
+
+    def where(self) -> dict[str, Any]:
+        """The Ray node id, host name and process id of this actor."""
+        import ray
+
+        node = ray.get_runtime_context().get_node_id()
+        return {"node": node, "host": socket.gethostname(), "pid": os.getpid()}
+
+
+class RayPool:
+    """A :class:`~tolins.learning.pool.CandidatePool` over Ray actor handles (picklable: pass
+    it to the Ray tasks that train)."""
+
+    def __init__(self, workers: Sequence[Any]) -> None:
+        if not workers:
+            raise ValueError("a RayPool needs at least one RolloutWorker actor")
+        self.workers = list(workers)
+
+    @classmethod
+    def start(cls) -> RayPool:
+        """One actor per CPU of every alive node of the cluster ``ray.init`` connected to."""
+        import ray
+        from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+        actor = ray.remote(RolloutWorker)
+        workers = []
+        for node in ray.nodes():
+            cpus = int(node.get("Resources", {}).get("CPU", 0)) if node.get("Alive") else 0
+            strategy = NodeAffinitySchedulingStrategy(node["NodeID"], soft=False)
+            options = {"num_cpus": 0, "scheduling_strategy": strategy}
+            workers += [actor.options(**options).remote() for _ in range(cpus)]
+        return cls(workers)
+
+    def rollouts(self, policy, workpieces, backend, candidates, seeds) -> list[list[Rollout]]:
+        import ray
+        from ray.util import ActorPool
+
+        shared = ray.put(policy), ray.put(list(workpieces))
+        jobs = zip(candidates, seeds, strict=True)
+        pool = ActorPool(self.workers)
+        return list(pool.map(lambda a, job: a.candidate.remote(*shared, backend, *job), list(jobs)))
+
+    def where(self) -> list[dict[str, Any]]:
+        """:meth:`RolloutWorker.where` of every actor."""
+        import ray
+
+        return ray.get([w.where.remote() for w in self.workers])
+
+    def close(self) -> None:
+        """Nothing: the actors outlive one training; :meth:`shutdown` ends them."""
+
+    def shutdown(self) -> None:
+        """End every actor (and its envs)."""
+        import ray
+
+        for worker in self.workers:
+            ray.kill(worker)

@@ -23,10 +23,12 @@ def stage_kind(name: str) -> str:
 
 
 def worker_label(entry: dict[str, Any]) -> str:
-    """The lane of a stage: Ray node and worker process, or host and thread (local)."""
-    if entry.get("node"):
-        return f"node {entry['node'][:6]} pid {entry['pid']}"
-    return f"{entry.get('host')} {entry.get('thread') or entry.get('pid')}"
+    """The lane of a stage: its Ray node (or host) and process, and its thread if not the
+    main one (the local executor's evaluation threads)."""
+    where = f"node {entry['node'][:6]}" if entry.get("node") else str(entry.get("host"))
+    thread = entry.get("thread")
+    label = f"{where} pid {entry.get('pid')}"
+    return label if thread in (None, "MainThread") else f"{label} {thread}"
 
 
 def timeline_rows(stage_times: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
@@ -55,19 +57,29 @@ def plot_timeline(path: str | Path, rows: list[dict[str, Any]], title: str) -> P
     lanes = sorted({row["lane"] for row in rows})
     unit, scale = ("minutes", 60) if max(row["end"] for row in rows) > 180 else ("s", 1)
     figure, axes = plt.subplots(figsize=(11, 1.2 + 0.45 * len(lanes)))
+    span = max(row["end"] for row in rows) / scale
     for row in rows:
         y, left = lanes.index(row["lane"]), row["start"] / scale
         width = (row["end"] - row["start"]) / scale
         axes.barh(y, width, left=left, color=KINDS[row["kind"]], edgecolor="white")
-        if row["kind"] == "training":
+        if row["kind"] == "training" and width > 0.08 * span:  # room for its name
             axes.text(left, y, f" {row['name']}", va="center", fontsize=7)
     axes.set_yticks(range(len(lanes)), lanes, fontsize=8)
     axes.set_xlabel(f"{unit} since the first stage started")
     axes.set_title(title, fontsize=10)
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in KINDS.values()]
-    axes.legend(handles, list(KINDS), loc="lower right", fontsize=8)
+    axes.legend(handles, list(KINDS), loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
     figure.tight_layout()
     return _save(figure, path)
+
+
+def plot_run_json(path: str | Path, run_json: str | Path) -> Path:
+    """:func:`plot_timeline` of a bench's ``run.json`` (e.g. one copied elsewhere)."""
+    record = json.loads(Path(run_json).read_text())
+    title = f"tolins bench --profile {record['config']['profile']} " + (
+        f"--executor {record['executor']['name']}: {record['wall_s'] / 60:.1f} min"
+    )
+    return plot_timeline(path, timeline_rows(record["stages"]), title)
 
 
 def write_timeline(out: str | Path, run: BenchRun) -> list[Path]:

@@ -21,6 +21,7 @@ import pytest
 import ray
 
 from tolins.bench.config import BenchConfig
+from tolins.bench.executor import RayExecutor
 from tolins.bench.runner import run_bench
 from tolins.cli import main
 from tolins.learning.bc import behaviour_clone
@@ -246,6 +247,11 @@ def test_an_address_without_a_ray_head_says_so(tmp_path, capsys):
     )
     assert "no Ray head answers there" in capsys.readouterr().err
     assert not (tmp_path / "stages").exists()
+
+
+def test_an_address_while_ray_runs_in_this_process_is_refused(local_ray):
+    with pytest.raises(ValueError, match="already initialised in this process"):
+        RayExecutor("auto")
 
 
 def test_the_ray_executor_without_ray_says_how_to_install_it(tmp_path, capsys, monkeypatch):

@@ -124,9 +124,9 @@ class RayExecutor:
     """Jobs as Ray tasks following their dependencies.
 
     Args:
-        address: ``None`` starts a Ray instance on this machine; ``auto`` or
-            ``HOST:PORT`` connects to a running cluster. If Ray is already initialised
-            in this process (``ray.init(...)`` by the caller), that one is used.
+        address: ``None`` starts a Ray instance on this machine, or uses the one this
+            process already initialised (``ray.init(...)`` by the caller); ``auto`` or
+            ``HOST:PORT`` connects to a running cluster.
         shared: A folder every task checks it can see (the bench's output folder).
     """
 
@@ -143,9 +143,15 @@ class RayExecutor:
         import torch
 
         self._ray = ray
+        _probe(address)
         self._owned = not ray.is_initialized()
         if self._owned:
             _connect(ray, address)
+        elif address is not None:
+            raise ValueError(
+                f"address={address!r}, but Ray is already initialised in this process: "
+                "pass no address to use that instance, or call ray.shutdown() first"
+            )
         self.shared = None if shared is None else str(Path(shared).resolve())
         self.torch_threads = torch.get_num_threads()
         self.placement: dict[str, dict[str, Any]] = {}
@@ -206,19 +212,24 @@ def make_executor(
     raise ValueError(f"executor={name!r}; allowed: {', '.join(EXECUTORS)}")
 
 
+def _probe(address: str | None) -> None:
+    """Fail fast, with what to do, when nothing listens at ``HOST:PORT``."""
+    if address is None or address == "auto":
+        return
+    host, port = address.rsplit(":", 1)
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5).close()
+    except OSError as error:
+        raise ValueError(
+            f"address={address!r}: no Ray head answers there ({error}); start one with "
+            "`ray start --head --port=PORT` or pass --address auto"
+        ) from None
+
+
 def _connect(ray: Any, address: str | None) -> None:
     if address is None:
         ray.init(include_dashboard=False, configure_logging=False)
         return
-    if address != "auto":
-        host, port = address.rsplit(":", 1)
-        try:
-            socket.create_connection((host.strip("[]"), int(port)), timeout=5).close()
-        except OSError as error:
-            raise ValueError(
-                f"address={address!r}: no Ray head answers there ({error}); start one with "
-                "`ray start --head --port=PORT` or pass --address auto"
-            ) from None
     try:
         ray.init(address=address, configure_logging=False)
     except ConnectionError as error:

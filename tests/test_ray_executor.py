@@ -270,3 +270,37 @@ def test_the_local_executor_runs_without_importing_ray(tmp_path):
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+def test_the_timeline_draws_the_stages_that_ran_on_their_workers(tmp_path):
+    from tolins.bench.timeline import plot_timeline, timeline_rows, worker_label
+
+    local = {"node": None, "host": "vm", "pid": 7, "thread": "MainThread"}
+    times = {
+        "bc_safe-seed0": {"started": 100.0, "finished": 110.0, "cached": False, **local},
+        "eval-C2.1-seed0": {
+            "started": 110.0,
+            "finished": 115.0,
+            "cached": False,
+            **{**local, "thread": "ThreadPoolExecutor-0_1"},
+        },
+        "pi_n_safe-seed0": {"started": 1.0, "finished": 2.0, "cached": True, **local},
+        "inference-study": {
+            "started": 105.0,
+            "finished": 120.0,
+            "cached": False,
+            **local,
+            "node": "f31ce0abcdef",
+            "pid": 9,
+        },
+    }
+    rows = timeline_rows(times)
+    assert [r["name"] for r in rows] == ["bc_safe-seed0", "inference-study", "eval-C2.1-seed0"]
+    assert [(r["start"], r["end"]) for r in rows] == [(0, 10), (5, 20), (10, 15)]
+    assert [r["kind"] for r in rows] == ["training", "study", "evaluation"]
+    assert worker_label(local) == "vm pid 7"
+    assert rows[1]["lane"] == "node f31ce0 pid 9"
+    assert rows[2]["lane"] == "vm pid 7 ThreadPoolExecutor-0_1"
+    path = plot_timeline(tmp_path / "timeline.png", rows, "test")
+    assert path.read_bytes()[:4] == b"\x89PNG"
+    assert timeline_rows({"x": {**times["pi_n_safe-seed0"]}}) == []  # nothing ran

@@ -10,6 +10,7 @@ idle actor (``ray.util.ActorPool``) and returns the episodes in the candidates' 
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import socket
 from collections.abc import Sequence
@@ -40,8 +41,9 @@ class RolloutWorker:
     ) -> list[Rollout]:
         """:func:`tolins.learning.pool.candidate_rollouts` in this actor's envs."""
         envs = self._envs.setdefault(backend, EnvCache(backend))
-        flat = np.array(flat)  # a writable copy: Ray hands arrays out read-only
-        return candidate_rollouts(envs, policy, workpieces, flat, seeds)
+        # writable copies: Ray hands arrays out read-only (and torch warns about those)
+        pieces = [_writable(piece) for piece in workpieces]
+        return candidate_rollouts(envs, policy, pieces, np.array(flat), seeds)
 
     def env_ids(self) -> list[tuple[str, str]]:
         """``(backend, env id)`` of every env this actor keeps."""
@@ -53,6 +55,12 @@ class RolloutWorker:
 
         node = ray.get_runtime_context().get_node_id()
         return {"node": node, "host": socket.gethostname(), "pid": os.getpid()}
+
+
+def _writable(piece: Any) -> Any:
+    if getattr(piece, "embedding", None) is None:
+        return piece
+    return dataclasses.replace(piece, embedding=np.array(piece.embedding))
 
 
 class RayPool:

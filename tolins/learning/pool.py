@@ -49,14 +49,34 @@ class EnvCache:
 
 
 def policy_rollouts(
-    envs: EnvCache, policy: Policy, workpieces: Sequence[Workpiece], seeds: Sequence[int]
+    envs: EnvCache,
+    policy: Policy,
+    workpieces: Sequence[Workpiece],
+    seeds: Sequence[int],
+    first: int = 0,
 ) -> list[Rollout]:
-    """Episode ``e`` of ``policy`` from ``seeds[e]`` on workpiece ``e % len(workpieces)``."""
+    """Episode ``e`` of ``policy`` from ``seeds[e]`` on workpiece ``(first + e) %
+    len(workpieces)``."""
     episodes = []
     for e, seed in enumerate(seeds):
-        piece = workpieces[e % len(workpieces)]
+        piece = workpieces[(first + e) % len(workpieces)]
         episodes.append(rollout(envs.get(piece.env_id), policy.bind(piece.embedding), seed))
     return episodes
+
+
+def spread_rollouts(
+    pool: CandidatePool,
+    policy: Policy,
+    workpieces: Sequence[Workpiece],
+    backend: str,
+    flat: np.ndarray,
+    seeds: Sequence[int],
+) -> list[Rollout]:
+    """The episodes of one parameter vector, one job per episode on ``pool`` (the same
+    episodes as :func:`candidate_rollouts` of all ``seeds`` in one env)."""
+    n = len(seeds)
+    groups = pool.rollouts(policy, workpieces, backend, [flat] * n, [[s] for s in seeds], range(n))
+    return [episode for group in groups for episode in group]
 
 
 def candidate_rollouts(
@@ -65,9 +85,11 @@ def candidate_rollouts(
     workpieces: Sequence[Workpiece],
     flat: np.ndarray,
     seeds: Sequence[int],
+    first: int = 0,
 ) -> list[Rollout]:
-    """The episodes of one CMA-ES candidate: ``policy`` with trainable parameters ``flat``."""
-    return policy_rollouts(envs, policy.with_flat(flat), workpieces, seeds)
+    """The episodes of one CMA-ES candidate: ``policy`` with trainable parameters ``flat``
+    (``first``: :func:`policy_rollouts`'s)."""
+    return policy_rollouts(envs, policy.with_flat(flat), workpieces, seeds, first)
 
 
 class CandidatePool(Protocol):
@@ -80,8 +102,10 @@ class CandidatePool(Protocol):
         backend: str,
         candidates: Sequence[np.ndarray],
         seeds: Sequence[Sequence[int]],
+        first: Sequence[int] | None = None,
     ) -> list[list[Rollout]]:
-        """:func:`candidate_rollouts` of every ``candidates[c]`` from ``seeds[c]``, in order."""
+        """:func:`candidate_rollouts` of every ``candidates[c]`` from ``seeds[c]`` (and
+        ``first[c]``, default 0), in order."""
         ...
 
     def close(self) -> None:
@@ -109,11 +133,14 @@ class ThreadPool:
                 self._caches.append(caches[backend])
         return caches[backend]
 
-    def rollouts(self, policy, workpieces, backend, candidates, seeds) -> list[list[Rollout]]:
-        def one(job: tuple[np.ndarray, Sequence[int]]) -> list[Rollout]:
+    def rollouts(
+        self, policy, workpieces, backend, candidates, seeds, first=None
+    ) -> list[list[Rollout]]:
+        def one(job: tuple[np.ndarray, Sequence[int], int]) -> list[Rollout]:
             return candidate_rollouts(self._envs(backend), policy, workpieces, *job)
 
-        return list(self._executor.map(one, zip(candidates, seeds, strict=True)))
+        first = [0] * len(candidates) if first is None else first
+        return list(self._executor.map(one, zip(candidates, seeds, first, strict=True)))
 
     def close(self) -> None:
         self._executor.shutdown()

@@ -38,12 +38,13 @@ class RolloutWorker:
         backend: str,
         flat: np.ndarray,
         seeds: Sequence[int],
+        first: int = 0,
     ) -> list[Rollout]:
         """:func:`tolins.learning.pool.candidate_rollouts` in this actor's envs."""
         envs = self._envs.setdefault(backend, EnvCache(backend))
         # writable copies: Ray hands arrays out read-only (and torch warns about those)
         pieces = [_writable(piece) for piece in workpieces]
-        return candidate_rollouts(envs, policy, pieces, np.array(flat), seeds)
+        return candidate_rollouts(envs, policy, pieces, np.array(flat), seeds, first)
 
     def env_ids(self) -> list[tuple[str, str]]:
         """``(backend, env id)`` of every env this actor keeps."""
@@ -87,12 +88,15 @@ class RayPool:
             workers += [actor.options(**options).remote() for _ in range(cpus)]
         return cls(workers)
 
-    def rollouts(self, policy, workpieces, backend, candidates, seeds) -> list[list[Rollout]]:
+    def rollouts(
+        self, policy, workpieces, backend, candidates, seeds, first=None
+    ) -> list[list[Rollout]]:
         import ray
         from ray.util import ActorPool
 
         shared = ray.put(policy), ray.put(list(workpieces))
-        jobs = zip(candidates, seeds, strict=True)
+        first = [0] * len(candidates) if first is None else first
+        jobs = zip(candidates, seeds, first, strict=True)
         pool = ActorPool(self.workers)
         return list(pool.map(lambda a, job: a.candidate.remote(*shared, backend, *job), list(jobs)))
 

@@ -53,7 +53,13 @@ from tolins.learning.demonstrations import Rollout, pairs
 from tolins.learning.discriminator import Discriminator
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import RSGailConfig
-from tolins.learning.pool import CandidatePool, EnvCache, ThreadPool, policy_rollouts
+from tolins.learning.pool import (
+    CandidatePool,
+    EnvCache,
+    ThreadPool,
+    policy_rollouts,
+    spread_rollouts,
+)
 
 CHECKPOINT = "checkpoint.pt"
 FORMAT = "tolins.rs_gail_run/1"
@@ -189,8 +195,9 @@ def train_rs_gail(
             began = time.perf_counter()
             alpha = config.alpha_at(i)
             means.append(np.array(es.mean, dtype=float))
-            mean = policy.with_flat(es.mean)
-            current = runner.run(mean, eval_seeds)
+            current = spread_rollouts(
+                candidate_pool, policy, workpieces, backend, es.mean, eval_seeds
+            )
             if i % config.discriminator_every == 0:
                 discriminator.update(expert_pairs, pairs(current), config.discriminator_steps)
             candidates = es.ask()

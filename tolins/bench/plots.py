@@ -165,7 +165,7 @@ def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarra
         axis.set(xlabel="env steps", ylabel=name)
         axis.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    figure.suptitle("RS-GAIL (π_n, from BC) vs PPO and SAC (from scratch) at equal env steps")
+    figure.suptitle("RS-GAIL (π_n, from BC) vs PPO and SAC (from scratch) against env steps")
     return _save(figure, path)
 
 

@@ -136,3 +136,19 @@ def test_sac_learns_from_the_dense_reward_in_a_few_thousand_steps(tmp_path) -> N
 
     trained = _dense_return(SAC.load(tmp_path / MODEL, device="cpu"))
     assert trained > untrained + 20  # it descends and approaches instead of drifting
+
+
+def test_rs_gail_curves_are_summed_into_env_steps_and_other_stages_skipped(tmp_path) -> None:
+    from tolins.learning.curves import write_curves_csv
+
+    history = [
+        {"iteration": i, "reward": 10.0 + i, "success": 1.0, "env_steps": 2000 + i}
+        for i in range(3)
+    ]
+    for stage in ("pi_n_safe-seed0", "bc_safe-seed0", "pi_phi_circle-seed0"):
+        write_curves_csv(tmp_path / stage / "curves.csv", history)
+    folders = {s: tmp_path / s for s in ("pi_n_safe-seed0", "bc_safe-seed0", "pi_phi_circle-seed0")}
+    curves = env_step_curves({**folders, "eval-C2.3-seed0": tmp_path / "missing"})
+    assert list(curves) == ["pi_n_safe-seed0"]
+    assert curves["pi_n_safe-seed0"]["env_steps"].tolist() == [2000, 4001, 6003]
+    assert curves["pi_n_safe-seed0"]["reward"].tolist() == [10.0, 11.0, 12.0]

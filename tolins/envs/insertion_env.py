@@ -98,7 +98,9 @@ class InsertionEnv(gym.Env):
     * ``"normalized_dense"``: the dense reward mapped affinely onto [0, 1]:
       ``(r - lo) / (hi - lo)``, ``lo = -3.5 - 1``, ``hi = c``; each term is scaled and
       ``reward_offset`` holds the shift. With success ending the episode the shift is a
-      small per-step bonus for staying in it; learn with ``dense``.
+      small per-step bonus for staying in it; learn with ``dense`` (measured: SB3 SAC
+      and PPO insert on MuJoCo from ``dense`` within 15k and 100k env steps, from
+      ``sparse`` and ``normalized_dense`` not within 15k; benchmarks/README.md).
 
     ``reward_offset`` is 0 and the shaping terms are 0 in the sparse mode. See
     :mod:`tolins.envs.reward`.
@@ -124,7 +126,8 @@ class InsertionEnv(gym.Env):
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
       ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
       the carrier collides with the board's top; reset poses and goals are validated;
-      stepping after the episode ended raises.
+      stepping after the episode ended raises; ``reward_mode`` (``sparse``, the
+      default, is the v0 reward bit for bit).
     * v0 (tolins 0.1.0): the first release.
     """
 

@@ -126,8 +126,8 @@ class InsertionEnv(gym.Env):
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
       ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
       the carrier collides with the board's top; reset poses and goals are validated;
-      stepping after the episode ended raises; ``reward_mode`` (``sparse``, the
-      default, is the v0 reward bit for bit).
+      stepping after the episode ended raises; ``reward_mode`` (the default,
+      ``sparse``, is the paper's reward as before).
     * v0 (tolins 0.1.0): the first release.
     """
 

@@ -18,7 +18,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-from rerun.chunk import RrdReader
+from rrd_tables import read_tables
 
 import tolins
 from tolins.cli import main
@@ -49,27 +49,12 @@ def _record(env_id: str, path: Path) -> list[list[tuple[float, dict[str, Any]]]]
     return episodes
 
 
-def _read(path: Path) -> dict[str, dict[str, list]]:
-    """``{entity: {column: values}}`` of every chunk, temporal rows sorted by step."""
-    tables: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
-    for chunk in RrdReader(path).stream():
-        kind = "static" if chunk.is_static else "temporal"
-        for name, values in chunk.to_record_batch().to_pydict().items():
-            tables[f"{chunk.entity_path}#{kind}"][name] += values
-    for table in tables.values():
-        if "step" in table:
-            order = np.argsort(table["step"], kind="stable")
-            for name in table:
-                table[name] = [table[name][i] for i in order]
-    return tables
-
-
 @pytest.fixture(scope="module", params=ENVS)
 def recording(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> tuple:
     env_id = request.param
     path = tmp_path_factory.mktemp("rrd") / f"{env_id.split('/')[1]}.rrd"
     episodes = _record(env_id, path)
-    return env_id, path, episodes, _read(path)
+    return env_id, path, episodes, read_tables(path)
 
 
 def test_logged_poses_equal_info_pose_step_by_step(recording: tuple) -> None:
@@ -176,7 +161,7 @@ def test_bent_pins_are_logged_per_episode(tmp_path: Path) -> None:
     path = tmp_path / "bent.rrd"
     env = gym.make("tolins/Circle2x1Defective-v1")
     record_episodes(env, SafeExpert(), 2, path, seed=0)
-    tables = _read(path)
+    tables = read_tables(path)
     centers = []
     for k in range(2):
         spec = spec_from_dict(json.loads(tables[f"/metadata/episode_{k:03d}#static"]["spec"][0][0]))
@@ -297,7 +282,7 @@ def test_record_cli_writes_a_verified_file(tmp_path: Path, capsys) -> None:
     assert main([*argv, "--episodes", "2", "--out", str(out), "--seed", "3"]) == 0
     assert "2 episodes" in capsys.readouterr().out
     assert check_rrd(out) > 0
-    tables = _read(out)
+    tables = read_tables(out)
     assert [tables[f"/metadata/episode_{k:03d}#static"]["seed"] for k in (0, 1)] == [[[3]], [[4]]]
     assert sorted(p.name for p in out.parent.iterdir()) == ["cli.rrd"]  # no temporary left
     assert main(["record", "--env", "tolins/Nope-v1", "--out", str(out)]) == 2

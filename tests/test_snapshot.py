@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections import defaultdict
 from pathlib import Path
 
 import gymnasium as gym
@@ -10,27 +9,13 @@ import numpy as np
 import pytest
 from rerun.blueprint.components import PlayState
 from rerun.chunk import RrdReader
+from rrd_tables import read_tables
 
 import tolins  # noqa: F401  (registers the env ids)
 from tolins.cli import main
 from tolins.policies.experts import SafeExpert
 from tolins.record import check_rrd, record_episodes
 from tolins.record.snapshot import cut_recording
-
-
-def _read(path: Path) -> dict[str, dict[str, list]]:
-    """``{entity#static|temporal: {column: values}}``, temporal rows sorted by step."""
-    tables: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
-    for chunk in RrdReader(path).stream():
-        kind = "static" if chunk.is_static else "temporal"
-        for name, values in chunk.to_record_batch().to_pydict().items():
-            tables[f"{chunk.entity_path}#{kind}"][name] += values
-    for table in tables.values():
-        if "step" in table:
-            order = np.argsort(table["step"], kind="stable")
-            for name in table:
-                table[name] = [table[name][i] for i in order]
-    return tables
 
 
 def _vulkan_driver() -> bool:
@@ -51,10 +36,10 @@ def _temporal(tables: dict) -> dict:
 
 
 def test_a_cut_keeps_every_row_up_to_the_step_and_nothing_after(recording, tmp_path) -> None:
-    whole = _read(recording)
+    whole = read_tables(recording)
     assert cut_recording(recording, tmp_path / "k.rrd", step=10) == 10
     assert check_rrd(tmp_path / "k.rrd") > 0
-    cut = _read(tmp_path / "k.rrd")
+    cut = read_tables(tmp_path / "k.rrd")
     assert _temporal(cut).keys() == _temporal(whole).keys()
     for entity, table in _temporal(whole).items():
         keep = [i for i, step in enumerate(table["step"]) if step <= 10]
@@ -67,9 +52,9 @@ def test_a_cut_keeps_every_row_up_to_the_step_and_nothing_after(recording, tmp_p
 
 def test_a_cut_by_time_and_the_default_cut(recording, tmp_path) -> None:
     assert cut_recording(recording, tmp_path / "t.rrd", time=2.6) == 10  # 0.25 s per step
-    last = max(max(t["step"]) for t in _temporal(_read(recording)).values())
+    last = max(max(t["step"]) for t in _temporal(read_tables(recording)).values())
     assert cut_recording(recording, tmp_path / "all.rrd") == last
-    assert _read(tmp_path / "all.rrd").keys() == _read(recording).keys()
+    assert read_tables(tmp_path / "all.rrd").keys() == read_tables(recording).keys()
 
 
 def test_the_cut_opens_following_its_last_step(recording, tmp_path) -> None:
@@ -86,7 +71,7 @@ def test_the_cut_opens_following_its_last_step(recording, tmp_path) -> None:
 
 
 def test_steps_outside_the_recording_are_refused(recording, tmp_path) -> None:
-    last = max(max(t["step"]) for t in _temporal(_read(recording)).values())
+    last = max(max(t["step"]) for t in _temporal(read_tables(recording)).values())
     with pytest.raises(ValueError, match=rf"allowed: 0 … {last}"):
         cut_recording(recording, tmp_path / "x.rrd", step=last + 1)
     with pytest.raises(ValueError, match="allowed: ≥ 0"):

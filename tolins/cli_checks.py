@@ -43,38 +43,32 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(self.prog, message)
 
 
-def _integer(text: str, allowed: str) -> int:
+def _integer(text: str, low: int, high: int | None = None) -> int:
+    """``text`` as an integer in ``[low, high]`` (no upper end with ``high=None``)."""
+    allowed = f"an integer ≥ {low}" if high is None else f"an integer {low} … {high}"
     try:
-        return int(text)
+        value = int(text)
     except ValueError:
         message = f"{text!r} is not an integer; allowed: {allowed}"
         raise argparse.ArgumentTypeError(message) from None
+    if value < low or (high is not None and value > high):
+        raise argparse.ArgumentTypeError(f"{value} is not allowed; allowed: {allowed}")
+    return value
 
 
 def seed(text: str) -> int:
     """A seed option: an integer 0 … 2**32 - 1."""
-    allowed = f"an integer 0 … {SEED_MAX}"
-    value = _integer(text, allowed)
-    if not 0 <= value <= SEED_MAX:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed; allowed: {allowed}")
-    return value
+    return _integer(text, 0, SEED_MAX)
 
 
 def port(text: str) -> int:
     """A TCP port option: an integer 1 … 65535."""
-    allowed = f"an integer 1 … {PORT_MAX}"
-    value = _integer(text, allowed)
-    if not 1 <= value <= PORT_MAX:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed; allowed: {allowed}")
-    return value
+    return _integer(text, 1, PORT_MAX)
 
 
 def positive_int(text: str) -> int:
     """A count option: an integer ≥ 1."""
-    value = _integer(text, "an integer ≥ 1")
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed; allowed: an integer ≥ 1")
-    return value
+    return _integer(text, 1)
 
 
 def env_ids(

@@ -82,7 +82,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
     """Add ``evaluate`` to the ``tolins`` parser."""
-    from tolins.learning.actors import ALLOWED
+    from tolins.learning.external import ALLOWED
 
     evaluate = commands.add_parser(
         "evaluate",

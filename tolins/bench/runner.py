@@ -52,7 +52,7 @@ def run_bench(
     rows = select_rows(config.rows)
     out = Path(config.out)
     cache = StageCache(out)
-    trainer = Trainer(cache, profile, config.backend, progress=progress, log=log)
+    trainer = Trainer(cache, profile, config.backend, progress=progress)
     run = BenchRun(config, profile, {}, [], None, 0.0)
     executor = make_executor(
         config.executor, workers=config.workers, address=config.address, shared=cache.root

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -26,13 +25,9 @@ def train_stage(
     upstream: Path | None,
 ) -> Path:
     """A job of :mod:`tolins.bench.executor`: :meth:`Trainer.train` in the cache under
-    ``root`` (RS-GAIL's progress bars if ``progress``, no log lines); ``policy.pt``."""
-    trainer = Trainer(StageCache(root), profile, backend, progress=progress, log=_silent)
+    ``root`` (RS-GAIL's progress bars if ``progress``); ``policy.pt``."""
+    trainer = Trainer(StageCache(root), profile, backend, progress=progress)
     return trainer.train(name, seed, upstream, pool)[0]
-
-
-def _silent(_: str) -> None:
-    pass
 
 
 class Trainer:
@@ -43,7 +38,6 @@ class Trainer:
         profile: The budgets.
         backend: ``mujoco`` or ``kinematic``.
         progress: Show RS-GAIL's progress bars.
-        log: Called with one line per stage (started, cached, finished).
     """
 
     def __init__(
@@ -53,13 +47,9 @@ class Trainer:
         backend: str,
         *,
         progress: bool = True,
-        log: Callable[[str], None] = print,
     ) -> None:
         self.cache, self.profile, self.backend = cache, profile, backend
-        self.progress, self.log = progress, log
-        self.wall_s: dict[str, float] = {}
-        self.cached: list[str] = []
-        self._done: dict[tuple[str, int], Path] = {}
+        self.progress = progress
 
     def config(self, name: str, seed: int) -> dict[str, Any]:
         """The stage config of training ``name`` with ``seed`` (its upstream's key inside)."""
@@ -90,22 +80,6 @@ class Trainer:
     def stage_name(self, name: str, seed: int) -> str:
         """The stage name of training ``name`` with ``seed``, e.g. ``pi_n_safe-seed0``."""
         return f"{name}-seed{seed}"
-
-    def policy(self, name: str, seed: int) -> Path:
-        """``policy.pt`` of training ``name`` with ``seed``, training its upstream first."""
-        if (name, seed) in self._done:
-            return self._done[name, seed]
-        training = TRAININGS[name]
-        upstream = None if training.upstream is None else self.policy(training.upstream, seed)
-        stage = self.stage_name(name, seed)
-        if not self.cache.finished(stage, self.config(name, seed)):
-            self.log(f"training {stage} ({training.method} on {', '.join(training.env_ids)})")
-        self._done[name, seed], cached = self.train(name, seed, upstream)
-        self.wall_s[stage] = self.cache.wall_s(self._done[name, seed].parent)
-        if cached:
-            self.cached.append(stage)
-        self.log(f"{stage}: {'cached' if cached else 'trained'} ({self.wall_s[stage]:.0f} s)")
-        return self._done[name, seed]
 
     def train(
         self, name: str, seed: int, upstream: Path | None, pool: CandidatePool | None = None

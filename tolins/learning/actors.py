@@ -8,17 +8,12 @@ from pathlib import Path
 import numpy as np
 
 from tolins.geometry.specs import SocketSpec
+from tolins.learning.external import ALLOWED
 from tolins.learning.policy import load_policy
 from tolins.policies import EXPERTS
 
 #: The policy file in the folder of a ``tolins train`` run.
 POLICY_FILE = "policy.pt"
-#: What :func:`make_actor` accepts, for error messages and help texts.
-ALLOWED = (
-    "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes, or "
-    "its --out folder), "
-    "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act)"
-)
 
 
 def make_actor(entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndarray]:

@@ -28,6 +28,14 @@ import numpy as np
 
 from tolins.paper import A_MAX
 
+#: What :func:`tolins.learning.actors.make_actor` accepts, for error messages and help
+#: texts (here, in a module without torch, so that building the CLI's parser stays fast).
+ALLOWED = (
+    "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes, or "
+    "its --out folder), "
+    "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act)"
+)
+
 Actor = Callable[[np.ndarray], np.ndarray]
 
 #: The policy module of an SB3 zip's ``policy_class`` -> the algorithm that loads it.

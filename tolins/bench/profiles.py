@@ -99,10 +99,11 @@ PROFILES: dict[str, Profile] = {
     # 5 training seeds, the unit of the verdicts' intervals (tolins.bench.statistics).
     # The deep-RL baselines get RS-GAIL's budget for π_n: 100 × (16 × 4 + 8) × 40 = 288,000.
     "paper": Profile("paper", 50, 200, 100, 100, 16, 4, 8, 100, 5, 500, 3),
-    # ≤ 15 min on 2 cores: RS-GAIL's reward rises most in its first 20-30 iterations.
-    # The baselines get 10,000 env steps each (RS-GAIL's π_n: 86,400), about 2 min for SAC
-    # on MuJoCo: the start of their curves only (benchmarks/README.md, "Deep-RL baselines").
-    "quick": Profile("quick", 50, 200, 30, 20, 16, 4, 8, 100, 1, 500, 2, rl_env_steps=10_000),
+    # About 15 min on 2 cores with three training seeds (the unit of the verdicts): a third
+    # of the paper's per-seed budgets (10 RS-GAIL iterations for π_n, 8 for φ2), 50
+    # evaluation episodes per row and seed; the baselines get 3,000 env steps each
+    # (RS-GAIL's π_n: 28,800), the start of their curves only (benchmarks/README.md).
+    "quick": Profile("quick", 50, 200, 10, 8, 16, 4, 8, 50, 3, 500, 2, rl_env_steps=3_000),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
     "tiny": Profile("tiny", 4, 5, 1, 1, 4, 1, 2, 2, 1, 6, 1, rl_env_steps=200, rl_curve_points=1),
 }

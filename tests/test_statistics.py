@@ -32,10 +32,10 @@ from tolins.bench.statistics import (
     sign,
     unit_samples,
 )
-from tolins.bench.table import PAPER, ROWS
+from tolins.bench.table import ALL_ROWS, PAPER
 from tolins.rollout import Episode
 
-BY_ID = {row.id: row for row in ROWS}
+BY_ID = {row.id: row for row in ALL_ROWS}
 #: The paper's four claims (other claims may compare rows beyond Table 1).
 PAPER_CLAIMS = ("rs_gail", "tolerance_guided", "inference", "polygon_transfer")
 
@@ -259,3 +259,18 @@ def test_claims_refuse_results_without_per_seed_figures():
     old = {r: {"reward_mean": 1.0, "reward_std": 0.1, "episodes": 100, "seeds": 1} for r in PAPER}
     with pytest.raises(ValueError, match="reward_per_seed"):
         check_claims(old)
+
+
+def test_the_deep_rl_claim_is_not_evaluated_at_unequal_budgets():
+    means = {row: [20.0, 21.0, 22.0] for row in ("C2.3", "P1.3")}
+    means |= {row: [0.0, 0.5, 1.0] for row in ("R1.1", "R1.2", "R1.3", "R1.4")}
+    table = _table(means)
+
+    def deep_rl(**kwargs):
+        return {c.claim.name: c for c in check_claims(table, **kwargs)}["rs_gail_vs_deep_rl"]
+
+    unequal = deep_rl(budgets=(3_000, 28_800))
+    assert unequal.verdict == "not evaluated" and "unequal budgets" in unequal.basis
+    assert len(unequal.comparisons) == 4  # the pairs are still shown
+    assert deep_rl(budgets=(288_000, 288_000)).verdict == "held"
+    assert deep_rl().verdict == "held"

@@ -41,11 +41,16 @@ _VERDICTS = {1: HELD, -1: NOT_HELD, 0: INCONCLUSIVE}
 
 @dataclass(frozen=True)
 class Claim:
-    """A claim: in every pair ``(better, worse)`` the first row has the higher mean reward."""
+    """A claim: in every pair ``(better, worse)`` the first row has the higher mean reward.
+
+    ``equal_budgets``: the claim is about equal env-step budgets (RS-GAIL against deep RL),
+    so it is not evaluated on a profile that gives the two sides different budgets.
+    """
 
     name: str
     statement: str
     pairs: tuple[tuple[str, str], ...]
+    equal_budgets: bool = False
 
 
 CLAIMS: tuple[Claim, ...] = (
@@ -66,9 +71,9 @@ CLAIMS: tuple[Claim, ...] = (
     Claim("polygon_transfer", "π_φ beats π_n on the unseen pentagon", (("P2.2", "P2.1"),)),
     Claim(
         "rs_gail_vs_deep_rl",
-        "RS-GAIL (π_n) beats PPO/SAC from scratch on the profile's env-step budgets (equal "
-        "on the paper profile; beyond the paper)",
+        "RS-GAIL (π_n) beats PPO/SAC from scratch at equal env steps (beyond the paper)",
         (("C2.3", "R1.1"), ("C2.3", "R1.2"), ("P1.3", "R1.3"), ("P1.3", "R1.4")),
+        equal_budgets=True,
     ),
 )
 
@@ -120,10 +125,14 @@ class ClaimCheck:
     verdict: str
     comparisons: tuple[Comparison, ...]
     seeds: int = 0
+    #: Why a claim whose rows ran was not evaluated (e.g. unequal budgets).
+    note: str = ""
 
     @property
     def basis(self) -> str:
         """What the verdict rests on, e.g. ``5 training seeds`` or the one-seed caveat."""
+        if self.note:
+            return self.note
         if not self.comparisons:
             return "rows not run"
         if self.comparisons[0].difference.over == EPISODES:
@@ -145,10 +154,13 @@ class ClaimCheck:
         }
 
 
-def check_claims(results: dict[str, dict[str, Any]]) -> list[ClaimCheck]:
+def check_claims(
+    results: dict[str, dict[str, Any]], *, budgets: tuple[int, int] | None = None
+) -> list[ClaimCheck]:
     """Each claim's verdict on ``results`` (row id → ``results.json`` entry); not evaluated
-    when one of its rows is missing. Raises ``ValueError`` for entries without per-seed
-    figures (tolins < 0.3)."""
+    when one of its rows is missing, or for an ``equal_budgets`` claim when ``budgets``
+    ``(deep RL, RS-GAIL's π_n)`` env steps differ (the pairs are still given). Raises
+    ``ValueError`` for entries without per-seed figures (tolins < 0.3)."""
     checks = []
     for claim in CLAIMS:
         if any(row not in results for pair in claim.pairs for row in pair):
@@ -158,7 +170,17 @@ def check_claims(results: dict[str, dict[str, Any]]) -> list[ClaimCheck]:
         verdicts = {c.verdict for c in comparisons}
         verdict = NOT_HELD if NOT_HELD in verdicts else HELD if verdicts == {HELD} else INCONCLUSIVE
         seeds = min(int(results[row]["seeds"]) for pair in claim.pairs for row in pair)
-        checks.append(ClaimCheck(claim, verdict, comparisons, seeds))
+        note = ""
+        if claim.equal_budgets and budgets is not None and budgets[0] != budgets[1]:
+            verdict, note = (
+                NOT_EVALUATED,
+                (
+                    f"unequal budgets: PPO/SAC {budgets[0]:,} env steps, RS-GAIL's π_n up to "
+                    f"{budgets[1]:,} (after BC on expert demonstrations); the pairs below only "
+                    "show where each stands at its own budget (env_step_curves.png)"
+                ),
+            )
+        checks.append(ClaimCheck(claim, verdict, comparisons, seeds, note))
     return checks
 
 

@@ -58,8 +58,13 @@ class Profile:
         per_iteration = self.popsize * self.candidate_episodes + self.curve_episodes
         return self.nominal_iterations * per_iteration * HORIZON
 
+    @property
+    def deep_rl_env_steps(self) -> int:
+        """Env steps of each PPO/SAC training: ``rl_env_steps``, else RS-GAIL's for π_n."""
+        return self.rl_env_steps or self.rs_gail_env_steps
+
     def sb3(self, algorithm: str, env_id: str, backend: str, seed: int) -> Sb3Config:
-        steps = self.rl_env_steps or self.rs_gail_env_steps
+        steps = self.deep_rl_env_steps
         return Sb3Config(
             algorithm,
             env_id,

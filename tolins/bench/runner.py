@@ -95,7 +95,8 @@ def run_bench(
     for row in rows:
         per_seed = [_episodes(run.stage_folders[f"eval-{row.id}-seed{s}"]) for s in range(seeds)]
         run.results[row.id] = row_entry(row, per_seed)
-    run.claims = check_claims(run.results)
+    budgets = (profile.deep_rl_env_steps, profile.rs_gail_env_steps)
+    run.claims = check_claims(run.results, budgets=budgets)
     if config.study:
         run.study = json.loads((run.stage_folders["inference-study"] / STUDY).read_text())
     run.wall_s = time.perf_counter() - began

@@ -154,18 +154,34 @@ def plot_learning_curves(path: str | Path, curves: dict[str, list[dict[str, floa
 
 def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarray]]) -> Path:
     """Sparse reward and success rate against env steps, one line per training stage
-    (RS-GAIL's π_n and the deep-RL baselines, :func:`tolins.bench.baselines.env_step_curves`)."""
+    (RS-GAIL's π_n and the deep-RL baselines, :func:`tolins.bench.baselines.env_step_curves`):
+    one colour and legend entry per training, one line per seed."""
     plt = _pyplot()
     figure, axes = plt.subplots(1, 2, figsize=(12, 3.8), constrained_layout=True)
-    for label, curve in curves.items():
-        style = {"ls": "--"} if label.startswith(("ppo", "sac")) else {}
+    colours: dict[str, str] = {}
+    for stage, curve in curves.items():
+        training = stage.rsplit("-seed", 1)[0]
+        first = training not in colours
+        colours.setdefault(training, f"C{len(colours) % 10}")
+        style = {"ls": "--"} if training.startswith(("ppo", "sac")) else {}
         for axis, key in zip(axes, ("reward", "success"), strict=True):
-            axis.plot(curve["env_steps"], curve[key], marker=".", label=label, **style)
+            axis.plot(
+                curve["env_steps"],
+                curve[key],
+                color=colours[training],
+                marker=".",
+                lw=1.2,
+                alpha=0.8,
+                label=training if first else None,
+                **style,
+            )
     for axis, name in zip(axes, ("reward (sparse, the paper's)", "success rate"), strict=True):
         axis.set(xlabel="env steps", ylabel=name)
         axis.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    figure.suptitle("RS-GAIL (π_n, from BC) vs PPO and SAC (from scratch) against env steps")
+    figure.suptitle(
+        "RS-GAIL (π_n, from BC) vs PPO and SAC (from scratch) against env steps, a line per seed"
+    )
     return _save(figure, path)
 
 

@@ -13,6 +13,7 @@ import warnings
 from pathlib import Path
 from urllib.parse import quote
 
+import numpy as np
 from rerun.chunk import RrdReader
 
 from tolins.record.snapshot import cut_recording
@@ -21,6 +22,8 @@ LOOPBACK = "127.0.0.1"
 #: Screenshot size in logical points.
 WINDOW_SIZE = "1280x800"
 SCREENSHOT_TIMEOUT_S = 180.0
+#: Renders tried before a blank screenshot is kept (:func:`_blank`).
+SCREENSHOT_ATTEMPTS = 3
 
 
 class RrdError(ValueError):
@@ -122,19 +125,34 @@ def take_screenshot(
     try:
         shown = cut_recording(path, cut, step=step, time=time)
         command = [*rerun_command(), *viewer_args(cut, screenshot=tmp)]
-        result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
-        if result.returncode != 0 or not tmp.is_file():
-            lines = [ln for ln in result.stderr.splitlines() if "panicked" in ln or "rror" in ln]
-            hint = lines[0].strip() if lines else f"exit status {result.returncode}"
-            raise RuntimeError(
-                f"{path}: headless rendering failed ({hint}); it needs a Vulkan driver, "
-                "e.g. Debian's mesa-vulkan-drivers (scripts/setup.sh installs it)"
-            )
+        for _ in range(SCREENSHOT_ATTEMPTS):
+            result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+            if result.returncode != 0 or not tmp.is_file():
+                lines = [
+                    ln for ln in result.stderr.splitlines() if "panicked" in ln or "rror" in ln
+                ]
+                hint = lines[0].strip() if lines else f"exit status {result.returncode}"
+                raise RuntimeError(
+                    f"{path}: headless rendering failed ({hint}); it needs a Vulkan driver, "
+                    "e.g. Debian's mesa-vulkan-drivers (scripts/setup.sh installs it)"
+                )
+            if not _blank(tmp):
+                break
         os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)
         cut.unlink(missing_ok=True)
     return shown
+
+
+def _blank(png: Path) -> bool:
+    """Whether the middle of the screenshot ``png`` is one flat colour: on a loaded machine
+    the headless viewer now and then captures before it has drawn the scene."""
+    from PIL import Image
+
+    image = np.asarray(Image.open(png).convert("L"), dtype=float)
+    height, width = image.shape
+    return float(image[height // 4 : 3 * height // 4, width // 4 : 3 * width // 4].std()) < 1.0
 
 
 def _has_display() -> bool:

@@ -111,6 +111,23 @@ def test_goal_search_beats_nominal_on_known_defect() -> None:
     assert result.expected_success > float(expected_success(SPEC, post, np.zeros(3))[0]) + 0.1
 
 
+def test_goal_searches_in_threads_find_what_they_find_alone() -> None:
+    """pycma draws from numpy's global RNG: searches run in threads (π_φ* evaluations run
+    two at a time) must not interleave their draws."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    history = History.empty().append([0, 0, 0], False)
+    post = sample_posterior(SPEC, history, SIGMA, 500, _rng(2))
+
+    def search(seed: int) -> np.ndarray:
+        return find_goal(SPEC, post, _rng(seed)).goal
+
+    alone = [search(seed) for seed in range(8)]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(search, range(8)))
+    assert all(np.array_equal(a, b) for a, b in zip(alone, threaded, strict=True))
+
+
 def test_goal_moves_the_bent_pin_back() -> None:
     """Pin 1 (at y = +2.5 mm) bent 0.3 mm along +x: the goal moves it along -x."""
     true = np.array([[0.0, 0.0], [0.3, 0.0]])

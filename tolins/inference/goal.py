@@ -13,6 +13,7 @@ posterior's weights already integrate (:mod:`.posterior`). The search starts CMA
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import cma
@@ -25,6 +26,8 @@ from tolins.inference.posterior import Posterior, sample_posterior
 #: Below this best expected success the workpiece is recommended for discarding.
 DISCARD_THRESHOLD = 0.02
 _CANDIDATES = 128
+#: Held while a goal search draws from numpy's global RNG (pycma's).
+_GLOBAL_RNG = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -138,17 +141,21 @@ def _refine(
         "verb_disp": 0,
         "tolflatfitness": iterations,
     }
-    es = cma.CMAEvolutionStrategy(start * scale, 0.25 * spec.clearance, options)
     best, best_score, evaluations = start, start_score, 0
-    while not es.stop():
-        population = np.array(es.ask())
-        goals = population / scale
-        scores = expected_success(spec, posterior, goals)
-        evaluations += len(goals)
-        top = int(np.argmax(scores))
-        if scores[top] > best_score:
-            best, best_score = goals[top], float(scores[top])
-        es.tell(list(population), list(-scores))
+    # pycma seeds numpy's global RNG and ask() draws from it: hold it for the whole search,
+    # or two searches in threads (π_φ* evaluations run two at a time) interleave their
+    # draws and neither is reproducible.
+    with _GLOBAL_RNG:
+        es = cma.CMAEvolutionStrategy(start * scale, 0.25 * spec.clearance, options)
+        while not es.stop():
+            population = np.array(es.ask())
+            goals = population / scale
+            scores = expected_success(spec, posterior, goals)
+            evaluations += len(goals)
+            top = int(np.argmax(scores))
+            if scores[top] > best_score:
+                best, best_score = goals[top], float(scores[top])
+            es.tell(list(population), list(-scores))
     return best, best_score, evaluations
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tolins.bench.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_HELD
+from tolins.bench.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD
 from tolins.bench.config import BenchConfig
 from tolins.bench.results import read_results, row_entry
 from tolins.bench.runner import run_bench
@@ -146,7 +146,11 @@ def _check_outputs(out: Path, backend: str) -> dict:
     assert json.loads((out / f"results.{backend}.json").read_text()) == document
     run = json.loads((out / "run.json").read_text())
     assert set(run["claims"]) == {c.name for c in CLAIMS}
-    assert all(c["verdict"] in (HELD, NOT_HELD, INCONCLUSIVE) for c in run["claims"].values())
+    claims = dict(run["claims"])
+    deep_rl = claims.pop("rs_gail_vs_deep_rl")  # tiny: 200 env steps against RS-GAIL's 240
+    assert deep_rl["verdict"] == NOT_EVALUATED and "unequal budgets" in deep_rl["basis"]
+    assert len(deep_rl["comparisons"]) == 4
+    assert all(c["verdict"] in (HELD, NOT_HELD, INCONCLUSIVE) for c in claims.values())
     for name in run["claims"]:
         assert (out / "claims" / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     study = json.loads((out / "inference.json").read_text())

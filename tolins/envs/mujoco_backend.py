@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 
 from tolins.envs.backend import BackendState
+from tolins.envs.episode import check_control_dt
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import make_mjcf
@@ -38,14 +39,9 @@ def _touch_sensors(model: mujoco.MjModel) -> tuple[int, int]:
 
 
 def physics_steps(model: mujoco.MjModel, control_dt: float) -> int:
-    """How many physics steps make one control period; ``ValueError`` if not whole."""
-    substeps = round(control_dt / model.opt.timestep)
-    if substeps < 1 or abs(substeps * model.opt.timestep - control_dt) > 1e-9:
-        raise ValueError(
-            f"control_dt={control_dt!r} is not a whole number of physics steps of "
-            f"{model.opt.timestep} s"
-        )
-    return substeps
+    """How many physics steps make one control period; ``ValueError`` for a ``control_dt``
+    that :func:`~tolins.envs.episode.check_control_dt` refuses (the rule of every backend)."""
+    return round(check_control_dt(control_dt) / model.opt.timestep)
 
 
 class ServoStepper:

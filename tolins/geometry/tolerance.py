@@ -226,12 +226,17 @@ def gaps_inside(spec: CircularSocket, gaps: np.ndarray) -> np.ndarray:
     return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
 
 
-def _pin_gaps(holes: np.ndarray, eps: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    pins = holes + eps
+def moved_pins(pins: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """World ``(x, y)`` ``(..., n_pins, 2)`` of pin centres ``pins`` ``[..., n_pins, 2]``
+    (workpiece frame) at poses ``[..., >= 3]``: ``R(theta) p + (x, y)``."""
     cos, sin = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
-    dx = cos * pins[..., 0] - sin * pins[..., 1] + poses[..., 0, None] - holes[:, 0]
-    dy = sin * pins[..., 0] + cos * pins[..., 1] + poses[..., 1, None] - holes[:, 1]
-    return np.stack([dx, dy], axis=-1)
+    x = cos * pins[..., 0] - sin * pins[..., 1] + poses[..., 0, None]
+    y = sin * pins[..., 0] + cos * pins[..., 1] + poses[..., 1, None]
+    return np.stack([x, y], axis=-1)
+
+
+def _pin_gaps(holes: np.ndarray, eps: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    return moved_pins(holes + eps, poses) - holes
 
 
 def _checked_offsets(spec: CircularSocket, offsets: object) -> np.ndarray:

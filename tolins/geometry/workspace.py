@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.tolerance import contains
+from tolins.geometry.tolerance import contains, moved_pins
 from tolins.geometry.validation import checked_array
 
 #: Servo range of x and y (mm): ``|x|, |y| ≤ XY_RANGE`` about the board's origin. The
@@ -35,12 +35,7 @@ POSE_HIGH = np.array([XY_RANGE, XY_RANGE, THETA_RANGE, Z_MAX])
 
 def pin_axes(spec: SocketSpec, poses: object) -> np.ndarray:
     """World ``(x, y)`` of every pin's axis ``(..., n_pins, 2)`` for poses ``[..., >= 3]``."""
-    poses = np.asarray(poses, dtype=float)
-    pins = spec.pin_centers
-    cos, sin = np.cos(poses[..., 2, None]), np.sin(poses[..., 2, None])
-    x = cos * pins[:, 0] - sin * pins[:, 1] + poses[..., 0, None]
-    y = sin * pins[:, 0] + cos * pins[:, 1] + poses[..., 1, None]
-    return np.stack([x, y], axis=-1)
+    return moved_pins(spec.pin_centers, np.asarray(poses, dtype=float))
 
 
 def reach(spec: SocketSpec) -> np.ndarray:

@@ -85,6 +85,16 @@ def board_margin(spec: SocketSpec) -> float:
     return max(BOARD_MARGIN, float(np.max(reach(spec) - cells)) + BOARD_OVERHANG)
 
 
+def board_filler_boxes(spec: SocketSpec) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The board's boxes ``(center_xy, half_size_xy)`` outside the hole cells."""
+    return board_boxes(spec.hole_centers, cell_half_width(spec), board_margin(spec))
+
+
+def scene_extent(spec: SocketSpec) -> float:
+    """Half-size (mm) of the scene around the board (the model's ``<statistic extent>``)."""
+    return float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + board_margin(spec)
+
+
 def hole_shape(spec: SocketSpec) -> tuple[int, float]:
     """Sides and circumradius of the polygon that models each hole."""
     if isinstance(spec, CircularSocket):
@@ -118,8 +128,7 @@ def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
             f'pos="{nums((cx, cy, 0.0))}"/>'
             for k in range(sides)
         ]
-    boxes = board_boxes(spec.hole_centers, half_width, board_margin(spec))
-    for i, (center, half) in enumerate(boxes):
+    for i, (center, half) in enumerate(board_filler_boxes(spec)):
         body.append(
             f'<geom name="board_box{i}" class="board" type="box" '
             f'pos="{nums((*center, -BOARD_THICKNESS / 2))}" '
@@ -207,7 +216,7 @@ def make_mjcf(spec: SocketSpec) -> str:
     board_assets, board_body = _board_xml(spec)
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
-    extent = float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + board_margin(spec)
+    extent = scene_extent(spec)
     carrier = carrier_half_size(spec)
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [

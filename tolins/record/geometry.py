@@ -12,11 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket, SocketSpec, inradius, polygon_vertices
-from tolins.mjcf.board import board_boxes, hole_wall_pieces
+from tolins.mjcf.board import hole_wall_pieces
 from tolins.mjcf.model import (
     BOARD_THICKNESS,
     PIN_LENGTH,
-    board_margin,
+    board_filler_boxes,
     carrier_half_size,
     cell_half_width,
     hole_shape,
@@ -113,7 +113,7 @@ def board_geometry(spec: SocketSpec) -> BoardGeometry:
         walls += [prism_mesh(piece + center, -BOARD_THICKNESS, 0.0) for piece in pieces]
         ring = np.vstack([outline, outline[:1]]) + center
         holes.append(np.column_stack([ring, np.zeros(len(ring))]))
-    boxes = board_boxes(spec.hole_centers, half_width, board_margin(spec))
+    boxes = board_filler_boxes(spec)
     box_set = BoxSet(
         np.array([[*c, -BOARD_THICKNESS / 2] for c, _ in boxes]),
         np.array([[*h, BOARD_THICKNESS / 2] for _, h in boxes]),
@@ -134,11 +134,6 @@ def pin_geometry(spec: SocketSpec) -> PinGeometry:
         )
     outline = polygon_vertices(spec.sides, spec.pin_circumradius)
     return PinGeometry(mesh=prism_mesh(outline, 0.0, PIN_LENGTH))
-
-
-def scene_extent(spec: SocketSpec) -> float:
-    """Half-size (mm) of the scene around the board, as the MJCF's ``<statistic extent>``."""
-    return float(np.max(np.abs(spec.hole_centers))) + cell_half_width(spec) + 10.0
 
 
 def carrier_box(spec: SocketSpec) -> BoxSet:

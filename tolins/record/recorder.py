@@ -14,8 +14,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from tolins.envs.insertion_env import InsertionEnv
+from tolins.mjcf.model import scene_extent
 from tolins.record.episode import EpisodeBuffer, send_episode
-from tolins.record.geometry import scene_extent
 from tolins.record.layout import default_blueprint
 from tolins.record.metadata import spec_to_dict
 from tolins.record.scene import log_board

@@ -18,7 +18,7 @@ import pyarrow.compute as pc
 import rerun as rr
 from rerun.chunk import Chunk, RrdReader
 
-from tolins.record.geometry import scene_extent
+from tolins.mjcf.model import scene_extent
 from tolins.record.layout import STEP, default_blueprint
 from tolins.record.metadata import spec_from_dict
 

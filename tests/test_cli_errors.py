@@ -142,3 +142,22 @@ def test_an_interrupted_command_exits_130_without_a_traceback(folder, capsys, mo
     monkeypatch.setattr(study, "run_study", interrupt)
     assert main(["infer-study", "--samples", "1"]) == 130
     assert capsys.readouterr().err.strip().splitlines()[-1] == "tolins infer-study: interrupted"
+
+
+@pytest.mark.parametrize("seed", [-1, 2**32, 1.5, True, "0"])
+def test_configs_refuse_the_seeds_the_cli_refuses(seed):
+    from tolins.inference.study import StudyConfig
+    from tolins.learning.embedding_config import EmbeddingTrainConfig
+    from tolins.learning.policy_config import TaskConfig
+    from tolins.learning.sb3_config import Sb3Config
+
+    makers = [
+        lambda s: TaskConfig(seed=s),
+        lambda s: StudyConfig(seed=s),
+        lambda s: EmbeddingTrainConfig(seed=s),
+        lambda s: Sb3Config("sac", ENV, seed=s),
+    ]
+    for make in makers:
+        assert make(cli_checks.SEED_MAX).seed == cli_checks.SEED_MAX
+        with pytest.raises(ValueError, match=r"seed=.*allowed: 0 ≤ an integer ≤ 4294967295"):
+            make(seed)

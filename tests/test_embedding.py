@@ -138,6 +138,9 @@ def test_wrong_architecture_checkpoint_is_refused(tiny_run, tmp_path: Path) -> N
     path.write_bytes(b"not a checkpoint")
     with pytest.raises(ValueError, match="not a readable torch checkpoint"):
         load_checkpoint(path)
+    path.write_bytes(b"")  # torch.load's EOFError has no message: the error still says why
+    with pytest.raises(ValueError, match=r"checkpoint \(EOFError\); allowed: a file tolins wrote"):
+        load_checkpoint(path)
 
 
 def test_config_options_come_from_the_dataclass() -> None:

@@ -158,7 +158,7 @@ def test_tolerance_guided_trains_only_the_residual(demos, bc_policy, tmp_path):
     assert np.any(guided.get_flat()[-4:] != 0)  # φ2's last layer moved from zero
 
 
-def test_cli_train_writes_its_artefacts(tmp_path):
+def test_cli_train_writes_its_artefacts(tmp_path, monkeypatch, capsys):
     common = ["--env", ENV, "--backend", "kinematic", "--demonstrations", "6"]
     assert main(["train", "bc", *common, "--epochs", "5", "--out", str(tmp_path / "bc")]) == 0
     rs = ["--iterations", "2", "--popsize", "4", "--episodes", "1", "--eval-episodes", "2"]
@@ -167,6 +167,19 @@ def test_cli_train_writes_its_artefacts(tmp_path):
     assert main(["train", "rs-gail", *common, *rs, *init, "--out", str(tmp_path / "rs")]) == 2
     assert main(["train", "rs-gail", *common, *rs, *init, "--out", str(tmp_path / "rs"),
                  "--resume"]) == 0  # fmt: skip
+    from tolins.learning import runs
+
+    def no_demonstrations(*_args, **_kwargs):
+        raise AssertionError("demonstrations collected before the resume check")
+
+    monkeypatch.setattr(runs, "demonstrations", no_demonstrations)
+    capsys.readouterr()
+    other = ["--iterations", "3", *rs[2:]]
+    assert main(["train", "rs-gail", *common, *other, *init, "--out", str(tmp_path / "rs"),
+                 "--resume"]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "another run configuration (differs in: configs)" in err and "--resume" in err, err
+    monkeypatch.undo()
     for name in ("bc/policy.pt", "bc/run.json", "bc/bc_loss.csv", "rs/policy.pt",
                  "rs/checkpoint.pt", "rs/curves.csv", "rs/curves.png", "rs/run.json"):  # fmt: skip
         assert (tmp_path / name).stat().st_size > 0, name

@@ -220,12 +220,13 @@ def test_replay_rejects_missing_and_corrupt_files(
     truncated = tmp_path / "truncated.rrd"
     record_episodes(gym.make("tolins/Square-v1"), SafeExpert(), 1, truncated)
     truncated.write_bytes(truncated.read_bytes()[:3000])
-    for path, what in (
-        (tmp_path / "missing.rrd", "no such file"),
-        (junk, "not a readable .rrd"),
-        (truncated, ".rrd recording"),
+    for path, what, status in (
+        (tmp_path / "missing.rrd", "does not exist; allowed: an existing file", 2),
+        (tmp_path, "is a folder", 2),
+        (junk, "not a readable .rrd", 1),
+        (truncated, ".rrd recording", 1),
     ):
-        assert main(["replay", str(path)]) == 1
+        assert main(["replay", str(path)]) == status
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and str(path) in err and what in err, err
         assert "Traceback" not in err

@@ -55,6 +55,7 @@ def _record(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace) -> int:
+    cli_checks.input_file("FILE", args.file)
     if args.web and args.port == args.grpc_port:
         raise cli_checks.OptionError(
             f"--port {args.port} is also --grpc-port; allowed: two different ports"

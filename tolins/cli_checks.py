@@ -17,8 +17,8 @@ from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import NoReturn
 
-#: The seeds every seeded library here accepts (numpy's legacy ``np.random.seed`` range).
-SEED_MAX = 2**32 - 1
+from tolins.geometry.validation import SEED_MAX
+
 PORT_MAX = 65535
 
 

@@ -22,6 +22,15 @@ def check_int(field: str, value: object, *, minimum: int, maximum: int | None = 
     return int(value)
 
 
+#: The seeds every seeded library here accepts (numpy's legacy ``np.random.seed`` range).
+SEED_MAX = 2**32 - 1
+
+
+def check_seed(field: str, value: object) -> int:
+    """Return ``value`` as an int if it is a seed: an integer 0 … :data:`SEED_MAX`."""
+    return check_int(field, value, minimum=0, maximum=SEED_MAX)
+
+
 def check_positive(field: str, value: object, unit: str = "mm") -> float:
     """Return ``value`` as a float if it is finite and > 0."""
     if isinstance(value, bool) or not isinstance(value, Real):

@@ -26,6 +26,7 @@ import numpy as np
 
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import gaps_inside, pin_gaps, pins_inside
+from tolins.geometry.validation import check_seed
 from tolins.inference.goal import centre_goals, next_goal
 from tolins.inference.history import History
 
@@ -85,6 +86,7 @@ class StudyConfig:
         for name, least in (("samples", 1), ("max_attempts", 1), ("particles", 2), ("workers", 1)):
             if getattr(self, name) < least:
                 raise ValueError(f"{name}={getattr(self, name)!r}; allowed: ≥ {least}")
+        check_seed("seed", self.seed)
         if not 0.0 <= self.discard_below < 1.0:
             raise ValueError(f"discard_below={self.discard_below!r}; allowed: 0 ≤ value < 1")
         unknown = set(self.methods) - set(METHODS)

@@ -27,7 +27,11 @@ def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:
     except FileNotFoundError:
         raise
     except Exception as error:
-        raise ValueError(f"{path} is not a readable torch checkpoint: {error}") from error
+        detail = f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
+        raise ValueError(
+            f"{path} is not a readable torch checkpoint ({detail}); allowed: a file tolins "
+            f"wrote in format {fmt!r}"
+        ) from error
     found = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
     if found != fmt:
         raise ValueError(f"{path} has format {found!r}; allowed: {fmt!r}")

@@ -14,10 +14,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import torch
-
-from tolins.atomic import atomic_write
 from tolins.geometry.tolerance import WINDOWS, ImageWindow
+from tolins.learning.artefacts import atomic_torch_save, load_payload
 from tolins.learning.autoencoder import Architecture, ToleranceAutoencoder
 from tolins.learning.ranges import FamilyRanges, ranges_from_dict
 
@@ -51,7 +49,7 @@ def save_checkpoint(path: str | os.PathLike, model: EmbeddingModel) -> Path:
         "window": asdict(model.window),
         "state_dict": model.network.state_dict(),
     }
-    return atomic_write(path, lambda file: torch.save(payload, file))
+    return atomic_torch_save(path, payload)
 
 
 def load_checkpoint(path: str | os.PathLike, family: str | None = None) -> EmbeddingModel:
@@ -62,15 +60,7 @@ def load_checkpoint(path: str | os.PathLike, family: str | None = None) -> Embed
     when its weights do not fit the architecture it declares.
     """
     path = Path(path)
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    except FileNotFoundError:
-        raise
-    except Exception as error:
-        raise ValueError(f"{path} is not a readable torch checkpoint: {error}") from error
-    if not isinstance(payload, dict) or payload.get("format") != FORMAT:
-        found = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
-        raise ValueError(f"{path} has format {found!r}; allowed: {FORMAT!r}")
+    payload = load_payload(path, FORMAT)
     stored = payload["family"]
     if family is not None and stored != family:
         raise ValueError(f"{path} is a {stored!r} checkpoint; allowed: {family!r}")

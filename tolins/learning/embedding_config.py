@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from tolins.geometry.validation import check_seed
 from tolins.learning.ranges import RANGES
 
 
@@ -33,6 +34,7 @@ class EmbeddingTrainConfig:
     def __post_init__(self) -> None:
         if self.family not in RANGES:
             raise ValueError(f"family={self.family!r}; allowed: {', '.join(RANGES)}")
+        check_seed("seed", self.seed)
         for name in ("workpieces", "epochs", "batch_size", "threads"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name}={getattr(self, name)!r}; allowed: an integer ≥ 1")

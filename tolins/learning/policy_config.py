@@ -9,6 +9,8 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from tolins.geometry.validation import check_seed
+
 
 def _check_at_least(config: object, names: tuple[str, ...], minimum: int) -> None:
     for name in names:
@@ -39,6 +41,7 @@ class TaskConfig:
 
     def __post_init__(self) -> None:
         _check_at_least(self, ("demonstrations",), 2)
+        check_seed("seed", self.seed)
 
 
 @dataclass(frozen=True)

@@ -280,12 +280,29 @@ def _save(path, es, iteration, history, means, discriminator, metadata) -> None:
     )
 
 
-def _load(path: Path, metadata: dict[str, Any], discriminator: Discriminator) -> dict[str, Any]:
-    payload = load_payload(path, FORMAT)
+def check_resumable(out: str | Path, metadata: dict[str, Any]) -> None:
+    """Raise ``ValueError`` if ``out``'s checkpoint (when there is one) was written by a run
+    with other ``metadata``: what a caller checks before it spends time on demonstrations."""
+    path = Path(out) / CHECKPOINT
+    if path.exists():
+        _check_metadata(path, load_payload(path, FORMAT), metadata)
+
+
+def _check_metadata(path: Path, payload: dict[str, Any], metadata: dict[str, Any]) -> None:
     stored = {k: v for k, v in payload["metadata"].items() if k != "tolins_version"}
     wanted = {k: v for k, v in metadata.items() if k != "tolins_version"}
     if stored != wanted:
-        raise ValueError(f"{path} was written by another run configuration; cannot resume it")
+        differ = sorted(k for k in stored.keys() | wanted.keys() if stored.get(k) != wanted.get(k))
+        raise ValueError(
+            f"{path} was written by another run configuration (differs in: "
+            f"{', '.join(differ)}); cannot resume it; allowed: --resume with the same options, "
+            "or another --out"
+        )
+
+
+def _load(path: Path, metadata: dict[str, Any], discriminator: Discriminator) -> dict[str, Any]:
+    payload = load_payload(path, FORMAT)
+    _check_metadata(path, payload, metadata)
     discriminator.load_full_state(payload["discriminator"])
     es = pickle.loads(payload["es"].numpy().tobytes())  # our own file, written by _save
     means = list(payload["means"].numpy())

@@ -21,7 +21,7 @@ from tolins.learning.demonstrations import Rollout, collect
 from tolins.learning.policy import load_policy, save_policy
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
 from tolins.learning.pool import CandidatePool
-from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
+from tolins.learning.rs_gail import RSGailResult, Workpiece, check_resumable, train_rs_gail
 from tolins.learning.tolerance_guided import train_tolerance_guided, workpieces
 
 #: The CMA-ES mean of every iteration, then the final policy's parameters (``.npy``).
@@ -71,6 +71,8 @@ def run_rs_gail(
     out = Path(out)
     start = None if init is None else _relative(init, out)
     metadata = run_metadata(task.seed, env=env_id, init=start, task=task, bc=bc, rs_gail=rs_gail)
+    if resume:
+        check_resumable(out, metadata)
     if init is not None:
         policy, _ = load_policy(init, kind="nominal")
     expert = demonstrations([env_id], task)
@@ -115,6 +117,8 @@ def run_tolerance_guided(
         rs_gail=rs_gail,
         residual=residual,
     )
+    if resume:
+        check_resumable(out, metadata)
     policy, _ = load_policy(nominal, kind="nominal")
     result = train_tolerance_guided(
         policy,

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tolins.envs.reward import check_reward_mode
-from tolins.geometry.validation import check_int
+from tolins.geometry.validation import check_int, check_seed
 
 ALGORITHM_NAMES = ("ppo", "sac")
 #: The trained model in a run's folder (an SB3 zip) and its learning curve.
@@ -45,4 +45,4 @@ class Sb3Config:
         check_reward_mode(self.reward_mode)
         for name in ("env_steps", "curve_every", "curve_episodes"):
             check_int(name, getattr(self, name), minimum=1)
-        check_int("seed", self.seed, minimum=0)
+        check_seed("seed", self.seed)

@@ -103,7 +103,7 @@ def test_three_seeds_against_one_compares_episodes_and_says_so(runs, tmp_path):
         assert (row.status == CONSISTENT) == (low <= row.margin and high >= -row.margin)
     text = format_comparison(result)
     assert "3 training seed(s)" in text and "1 training seed(s)" in text
-    assert "Over episodes" in text and "margin ±5.9" in text
+    assert "Over episodes" in text and f"margin ±{ONE_SEED_MARGIN}" in text
 
     partial = tmp_path / "partial.json"  # rows only one side has are listed
     document = read_results(one)

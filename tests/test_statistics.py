@@ -23,6 +23,7 @@ from tolins.bench.statistics import (
     EPISODES,
     ONE_SEED_MARGIN,
     SEEDS,
+    TRAINING_SPREAD,
     difference,
     improvement,
     iqm,
@@ -30,6 +31,7 @@ from tolins.bench.statistics import (
     probability_of_improvement,
     row_intervals,
     sign,
+    training_spread,
     unit_samples,
 )
 from tolins.bench.table import ALL_ROWS, PAPER
@@ -155,6 +157,22 @@ def test_the_one_seed_margin_counts_the_trained_rows():
     assert margin(over_episodes, trained=1) == 4.1
     assert margin(over_episodes, trained=0) == 0.0
     assert margin(difference([1.0, 2.0], [0.0, 1.0], SEEDS)) == 0.0
+
+
+def test_the_training_spread_is_the_one_the_paper_reference_measured():
+    import json
+
+    from tolins.bench.reference import reference_path
+
+    rows = json.loads(reference_path("paper").read_text())["rows"]
+    row, spread = training_spread(rows)
+    assert rows[row]["seeds"] >= 5
+    assert round(spread, 2) == TRAINING_SPREAD, (row, spread)
+    assert training_spread(
+        {"A": {"reward_per_seed": [1.0, 3.0]}, "B": {"reward_per_seed": [0.0, 1.0]}}
+    ) == ("A", 1.0)
+    with pytest.raises(ValueError, match="≥ 2 training seeds"):
+        training_spread({"A": {"reward_per_seed": [1.0]}})
 
 
 def test_bad_samples_and_old_entries_are_refused():

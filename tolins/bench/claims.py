@@ -11,8 +11,8 @@ bootstrap resamples the per-seed differences.
 Verdicts are three-valued. A pair *held* when its CI lies above 0, *did not hold* when it
 lies below, and is *inconclusive* when it contains 0. With one training seed the CI is over
 evaluation episodes and decides only beyond ± :func:`~tolins.bench.statistics.margin`
-(the training noise it cannot see: 5.9 reward for two trained rows, 4.1 for a trained row
-against an expert; see :mod:`tolins.bench.statistics`). A claim is the conjunction of its
+(the training noise it cannot see, :func:`~tolins.bench.statistics.one_seed_margin`; see
+:mod:`tolins.bench.statistics`). A claim is the conjunction of its
 pairs: held when every pair held, did not hold when any did not, inconclusive otherwise;
 *not evaluated* when a row is missing.
 """

@@ -7,8 +7,9 @@ difference of mean reward A − B gets a 95 % bootstrap CI (:mod:`tolins.bench.s
 over **training seeds** when both runs have ≥ 2 (their per-seed means resampled
 independently: two runs share no training), else over the **episodes** of each (all
 seeds' episodes pooled), which leaves training variance out, and so, as for the claims,
-such a difference decides only beyond :func:`~tolins.bench.statistics.margin` (5.9 reward
-for a trained row, 0 for an expert row, whose runs differ by evaluation alone).
+such a difference decides only beyond :func:`~tolins.bench.statistics.margin`
+(:data:`~tolins.bench.statistics.ONE_SEED_MARGIN` for a trained row, 0 for an expert row,
+whose runs differ by evaluation alone).
 
 A row *differs* when its CI lies beyond that margin (A higher or B higher) and is
 *consistent* otherwise: no difference was detected at that resolution, which is what a

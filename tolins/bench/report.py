@@ -18,6 +18,7 @@ from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
 from tolins.bench.evaluation import FIRST_SEED
 from tolins.bench.results import read_results, results_document
+from tolins.bench.statistics import one_seed_margin
 from tolins.bench.table import PAPER, ROWS, TRAININGS
 from tolins.bench.training import Trainer
 from tolins.envs.tasks import TASKS
@@ -304,9 +305,10 @@ _VERDICT_RULE = (
     "Each pair: the difference of mean reward [its 95 % stratified-bootstrap CI] and "
     "P(better > worse) [95 % CI] (rliable). *held*: the CI of the difference lies above 0; "
     "*did not hold*: below 0; *inconclusive*: it contains 0. With one training seed the CIs "
-    "are over episodes and decide only beyond the training noise they cannot show (±5.9 "
-    "reward for two trained rows, ±4.1 for a trained row against an expert). A claim holds "
-    "when every pair held and does not when any did not."
+    "are over episodes and decide only beyond the training noise they cannot show "
+    f"(±{one_seed_margin(2)} reward for two trained rows, ±{one_seed_margin(1)} for a "
+    "trained row against an expert). A claim holds when every pair held and does not when "
+    "any did not."
 )
 
 

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -49,10 +49,20 @@ CONFIDENCE = 0.95
 REPS = 2000
 BOOTSTRAP_SEED = 0
 SEEDS, EPISODES = "seeds", "episodes"
-#: Largest std of a row's per-seed mean reward measured on the paper profile (3 seeds).
+#: Largest std of a row's per-seed mean reward measured on the paper profile
+#: (:func:`training_spread` of ``reference:paper``; a test keeps the two equal).
 TRAINING_SPREAD = 2.07
-#: An interval over episodes (one training seed) decides only beyond ± this (reward).
-ONE_SEED_MARGIN = round(2 * math.sqrt(2) * TRAINING_SPREAD, 1)
+
+
+def one_seed_margin(trained: int) -> float:
+    """The one-seed rule's margin for a pair with ``trained`` trained rows (0, 1 or 2):
+    2 × :data:`TRAINING_SPREAD` × √``trained`` reward, to one decimal."""
+    return round(2 * TRAINING_SPREAD * math.sqrt(trained), 1)
+
+
+#: An interval over episodes (one training seed) of two trained rows decides only beyond
+#: ± this (reward).
+ONE_SEED_MARGIN = one_seed_margin(2)
 #: The figures of a row, in the order of results.json.
 FIGURES = ("reward", "success", "steps", "collisions")
 
@@ -195,12 +205,24 @@ def probability_of_improvement(x: Sequence[float], y: Sequence[float], over: str
 
 def margin(interval: Interval, trained: int = 2) -> float:
     """How far from 0 a difference's ``interval`` must lie to decide: 0 over seeds; over
-    episodes (one training seed) 2 × :data:`TRAINING_SPREAD` × √``trained``, ``trained``
-    the number of the two compared rows that were trained (an expert row has no training
-    variance): 5.9 reward for two (:data:`ONE_SEED_MARGIN`), 4.1 for one, 0 for none."""
-    if interval.over == SEEDS:
-        return 0.0
-    return round(2 * TRAINING_SPREAD * math.sqrt(trained), 1)
+    episodes (one training seed) :func:`one_seed_margin` of ``trained``, the number of the
+    two compared rows that were trained (an expert row has no training variance)."""
+    return 0.0 if interval.over == SEEDS else one_seed_margin(trained)
+
+
+def training_spread(rows: Mapping[str, Mapping[str, Any]]) -> tuple[str, float]:
+    """The row of ``rows`` (row id → ``results.json`` entry) whose per-seed mean reward
+    spreads most over training seeds, and that std (over seeds, the ± of results.md): how
+    :data:`TRAINING_SPREAD` is measured. ``ValueError`` without a row of ≥ 2 seeds."""
+    spreads = {
+        row: float(np.std(entry["reward_per_seed"]))
+        for row, entry in rows.items()
+        if len(entry.get("reward_per_seed") or ()) > 1
+    }
+    if not spreads:
+        raise ValueError("no row with ≥ 2 training seeds; allowed: results of a multi-seed run")
+    row = max(spreads, key=spreads.__getitem__)
+    return row, spreads[row]
 
 
 def sign(interval: Interval, margin_: float = 0.0) -> int:

@@ -153,8 +153,8 @@ def test_intervals_are_reproducible_and_leave_numpys_global_rng_alone():
 
 def test_the_one_seed_margin_counts_the_trained_rows():
     over_episodes = difference([1.0, 2.0], [0.0, 1.0], EPISODES)
-    assert margin(over_episodes) == ONE_SEED_MARGIN == 5.9
-    assert margin(over_episodes, trained=1) == 4.1
+    assert margin(over_episodes) == ONE_SEED_MARGIN == 9.5  # 2 × √2 × 3.36
+    assert margin(over_episodes, trained=1) == 6.7
     assert margin(over_episodes, trained=0) == 0.0
     assert margin(difference([1.0, 2.0], [0.0, 1.0], SEEDS)) == 0.0
 
@@ -265,12 +265,13 @@ def test_one_training_seed_decides_only_beyond_the_training_noise():
     assert small == INCONCLUSIVE
     assert check.basis.startswith(ONE_SEED)
     assert check.comparisons[0].difference.over == EPISODES
-    assert check.comparisons[0].margin == 5.9
-    assert verdict(30.0, 20.0)[0] == HELD
-    assert verdict(20.0, 30.0)[0] == NOT_HELD
-    # π_n against an expert: one trained row, margin 4.1
-    assert verdict(25.0, 20.0, ("C2.3", "C2.1"))[0] == HELD
-    assert verdict(23.5, 20.0, ("C2.3", "C2.1"))[0] == INCONCLUSIVE
+    assert check.comparisons[0].margin == 9.5
+    assert verdict(32.0, 20.0)[0] == HELD
+    assert verdict(20.0, 32.0)[0] == NOT_HELD
+    assert verdict(28.0, 20.0)[0] == INCONCLUSIVE  # +8: within two rows' training noise
+    # π_n against an expert: one trained row, margin 6.7
+    assert verdict(28.0, 20.0, ("C2.3", "C2.1"))[0] == HELD
+    assert verdict(25.5, 20.0, ("C2.3", "C2.1"))[0] == INCONCLUSIVE
 
 
 def test_claims_refuse_results_without_per_seed_figures():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import gymnasium as gym
@@ -97,14 +98,19 @@ def test_screenshots_show_the_chosen_step(recording, tmp_path) -> None:
 
     # Under load the headless viewer now and then captures before the recording's poses
     # have streamed in (the time line already at the step, the 3-D view not yet; seen 1 in
-    # 3 with three busy loops on 2 cores): each comparison may take up to three tries.
+    # 3 with three busy loops on 2 cores, and all three --time shots of one run partial
+    # beside a bench on both cores): each comparison may take a few tries.
     for attempt in range(3):
         early, late = scene(f"a{attempt}", "--step", "2"), scene(f"b{attempt}")
         if changed(early, late) > 0.02:
             break
     assert changed(early, late) > 0.02  # the workpiece has moved (measured: 0.037)
-    shots = [early, *(scene(f"t{i}", "--time", "0.5") for i in range(2))]
-    same = [changed(shots[i], shots[j]) for i, j in ((0, 1), (0, 2), (1, 2))]
+    shots = [early]
+    for attempt in range(4):
+        shots.append(scene(f"t{attempt}", "--time", "0.5"))
+        same = [changed(a, b) for a, b in itertools.combinations(shots, 2)]
+        if min(same) < 0.01:
+            break
     assert min(same) < 0.01, same  # 0.5 s is step 2 (measured: 0)
     assert not list(tmp_path.glob(".*"))  # no cut copy or temporary left
 

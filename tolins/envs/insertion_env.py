@@ -8,13 +8,13 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from tolins.envs.backend import Backend, BackendState
-from tolins.envs.episode import NO_SCORE, EpisodeScore, StepScore, TaskSettings, check_action
+from tolins.envs.backend import Backend
+from tolins.envs.episode import TaskSettings, check_action
+from tolins.envs.episode_state import EpisodeState
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.workspace import check_goal, check_pose
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
@@ -112,8 +112,12 @@ class InsertionEnv(gym.Env):
     **Randomisation**: ``reset()`` draws the initial pose from ``initial_pose``
     (see :class:`InitialPoseDistribution`) around the goal, or takes
     ``options={"pose": [x, y, theta, z]}``; ``options={"goal": [x*, y*, θ*]}`` moves
-    the goal. With ``defect_sigma``, every reset draws a new bent-pin workpiece
-    (per-pin offsets ~ N(0, sigma² I), mm) from the nominal circular ``socket``.
+    the goal of that episode only (gymnasium's convention: options apply to one reset;
+    ``env.goal = ...`` sets the goal of every later episode). With ``defect_sigma``,
+    every reset draws a new bent-pin workpiece (per-pin offsets ~ N(0, sigma² I), mm)
+    from the nominal circular ``socket``. ``reset`` validates every option before it
+    changes anything: a failed reset raises ``ValueError``, leaves the episode as it
+    was, and ``step`` raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
 
     **Info**: ``success``, ``is_success``, ``collision``, ``n_collisions``, ``pose``
     (true ``[x, y, theta, z]``), ``wrench`` (true ``[Fx, Fy, q_theta, Fz]``),
@@ -128,6 +132,10 @@ class InsertionEnv(gym.Env):
       the carrier collides with the board's top; reset poses and goals are validated;
       stepping after the episode ended raises; ``reward_mode`` (the default,
       ``sparse``, is the paper's reward as before).
+    * v1, tolins 0.4.0 (outcomes unchanged): ``options={"goal": ...}`` applies to one
+      episode (it used to persist); a failed reset changes nothing and the next step
+      raises ``ResetNeeded``; ``tolins.make_vec`` / ``gym.make_vec`` give the batched
+      :class:`~tolins.envs.vector.InsertionVectorEnv`, bit-identical per env.
     * v0 (tolins 0.1.0): the first release.
     """
 
@@ -166,17 +174,13 @@ class InsertionEnv(gym.Env):
             reward_mode=reward_mode,
             control_dt=control_dt,
         )
-        self.socket = socket
         self.backend_name = backend
-        self.goal = goal
         self.control_dt = self.settings.control_dt
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
         self.backend: Backend = BACKENDS[backend](socket, self.control_dt)
-        self._score = EpisodeScore(self.settings)
-        self._state: BackendState | None = None
-        self._observation = np.zeros(8)
+        self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
 
     nominal_socket = _setting("socket")
@@ -191,68 +195,32 @@ class InsertionEnv(gym.Env):
 
     @property
     def goal(self) -> np.ndarray:
-        """The goal ``[x*, y*, theta*]`` (mm, rad) the observation is measured from."""
-        return self._goal.copy()
+        """The goal ``[x*, y*, theta*]`` (mm, rad) of the episodes whose reset names none."""
+        return self._episode.goal
 
     @goal.setter
     def goal(self, value: Any) -> None:
-        self._goal = check_goal(value)
+        self._episode.goal = value
+
+    @property
+    def socket(self) -> SocketSpec:
+        """The workpiece of the current episode (a bent-pin draw with ``defect_sigma``)."""
+        return self._episode.socket
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        options = options or {}
-        unknown = set(options) - {"pose", "goal"}
-        if unknown:
-            raise ValueError(
-                f"reset options {sorted(unknown)} are unknown; allowed: 'pose', 'goal'"
-            )
-        if "goal" in options:
-            self.goal = options["goal"]
-        if self.defect_sigma is not None:
-            self.socket = self.settings.draw_socket(self.np_random)
-            self.backend = BACKENDS[self.backend_name](self.socket, self.control_dt)
+        plan = self._episode.plan(self.np_random, options)
+        if plan.socket is not self.backend.spec:
+            self.backend = BACKENDS[self.backend_name](plan.socket, self.control_dt)
             self.close()
-        if "pose" in options:
-            pose = check_pose(self.socket, options["pose"], "options['pose']")
-        else:
-            pose = check_pose(self.socket, self.initial_pose.sample(self.np_random, self._goal))
-        self._state = self.backend.reset(pose)
-        self._score.reset()
-        self._observation = self.settings.observe(self._state, self._goal, self.np_random)
-        return self._observation.copy(), self._info(NO_SCORE)
+        return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        if self._state is None:
-            raise gym.error.ResetNeeded("step() called before reset()")
-        self._score.check_running()
+        self._episode.check_running()
         state = self.backend.step(check_action(action))
-        if state.error is not None:
-            info = self._info(self._score.fault())
-            info["error"] = state.error
-            return self._observation.copy(), 0.0, False, True, info
-        self._state = state
-        score = self._score.score(state, self.socket)
-        self._observation = self.settings.observe(state, self._goal, self.np_random)
-        info = self._info(score)
-        return self._observation.copy(), score.reward, score.success, score.truncated, info
-
-    def _info(self, score: StepScore) -> dict[str, Any]:
-        state = self._state
-        success = self.settings.is_success(state, self.socket)
-        return {
-            "success": success,
-            "is_success": success,
-            "collision": score.collision,
-            "n_collisions": self._score.collisions,
-            "pose": state.pose.copy(),
-            "wrench": state.wrench.copy(),
-            "peak_force": state.peak_force,
-            "step": self._score.steps,
-            "goal": self._goal.copy(),
-            **score.reward_info(),
-        }
+        return self._episode.advance(state, self.np_random)
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":

@@ -12,7 +12,7 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
 
 
 from tolins import tolerance
-from tolins.envs import register_envs
+from tolins.envs import make_vec, register_envs
 from tolins.geometry import CircularSocket, PolygonSocket, sample_defects
 from tolins.mjcf import make_mjcf
 
@@ -38,6 +38,7 @@ __all__ = [
     "PolygonSocket",
     "__version__",
     "make_mjcf",
+    "make_vec",
     "sample_defects",
     "tolerance",
 ]

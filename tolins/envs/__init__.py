@@ -2,7 +2,7 @@
 
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.insertion_env import BACKENDS, InsertionEnv
-from tolins.envs.tasks import GENERIC_ID, TASKS, Task, register_envs
+from tolins.envs.tasks import GENERIC_ID, TASKS, Task, make_vec, register_envs
 
 __all__ = [
     "BACKENDS",
@@ -11,5 +11,6 @@ __all__ = [
     "InitialPoseDistribution",
     "InsertionEnv",
     "Task",
+    "make_vec",
     "register_envs",
 ]

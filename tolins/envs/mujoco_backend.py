@@ -44,6 +44,40 @@ def physics_steps(model: mujoco.MjModel, control_dt: float) -> int:
     return round(check_control_dt(control_dt) / model.opt.timestep)
 
 
+#: Contact-force reads per control step: five, as long as a step has five physics steps.
+CONTACT_CHECKS = 5
+
+
+def default_contact_checks(substeps: int) -> int:
+    """Contact-force reads per control step of ``substeps`` physics steps: ``min(5, substeps)``
+    (the 250 steps of the paper's 0.25 s: five reads, 50 steps apart)."""
+    return min(CONTACT_CHECKS, substeps)
+
+
+def board_wrench(theta: float, force: list[float], torque_z: float) -> np.ndarray:
+    """``[Fx, Fy, q_theta, Fz]`` (N, N·mm, world axes) the board exerts on the workpiece,
+    from the force sensor's ``force`` (workpiece axes, rotated by ``theta``) and the z
+    torque (model units); the one conversion of every MuJoCo stepper."""
+    fx, fy, fz = force
+    c, s = math.cos(theta), math.sin(theta)
+    wrench = np.array([s * fy - c * fx, -s * fx - c * fy, -torque_z, -fz])
+    return wrench * _FORCE_SCALE
+
+
+def simulation_fault(
+    warnings_before: int, warnings: list[int], qpos: np.ndarray, qvel: np.ndarray
+) -> str | None:
+    """What went wrong in a control step, or ``None``: a MuJoCo warning raised during it
+    (``warnings``: the counter of each ``mjtWarning`` now, their sum was
+    ``warnings_before``), else a non-finite state."""
+    if sum(warnings) != warnings_before:
+        raised = [mujoco.mjtWarning(i).name for i, number in enumerate(warnings) if number > 0]
+        return f"MuJoCo warning during the step: {', '.join(raised)}"
+    if not math.isfinite(sum(qpos.tolist()) + sum(qvel.tolist())):
+        return "non-finite MuJoCo state"
+    return None
+
+
 class ServoStepper:
     """The control step of a socket model, on a ``MjModel``/``MjData`` pair it does not own.
 
@@ -51,20 +85,29 @@ class ServoStepper:
     the joint's current position, then the commanded velocity is integrated over the
     step. A blocked workpiece so stops at the first contact and pushes with at most
     the servo's force limit instead of winding up. The summed normal force of the
-    pins' contacts is read ``contact_checks`` times per control step (after evenly
-    sized chunks of physics steps) for ``peak_force``.
+    pins' contacts is read after each of ``contact_checks`` chunks of physics steps per
+    control step, for ``peak_force``: chunks of ``nstep // contact_checks`` steps, the first
+    ``nstep % contact_checks`` one step longer, so ``min(contact_checks, nstep)`` reads
+    (evenly spaced whenever ``contact_checks`` divides ``nstep``: 5 reads 50 steps apart
+    at the default 0.25 s).
 
     Args:
         model: A model made by :func:`tolins.make_mjcf`.
         data: Its data; read and written in place.
-        contact_checks: Contact-force reads per control step.
+        contact_checks: Contact-force reads per control step (at most).
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, contact_checks: int = 5) -> None:
+    def __init__(
+        self, model: mujoco.MjModel, data: mujoco.MjData, contact_checks: int = CONTACT_CHECKS
+    ) -> None:
         contact_checks = check_int("contact_checks", contact_checks, minimum=1)
+        self.checks = contact_checks
+        self._bind(model, data)
+
+    def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Hold ``model`` and ``data`` and the views into ``data`` that the steps read."""
         self.model = model
         self.data = data
-        self.checks = contact_checks
         self._force = model.sensor("force").adr[0]
         self._torque = model.sensor("torque").adr[0]
         touch, n_pins = _touch_sensors(model)
@@ -75,18 +118,22 @@ class ServoStepper:
         self._warnings = data.warning.number
         self._pin_geoms = {model.geom(f"pin{i}").id: i for i in range(n_pins)}
 
+    def __getstate__(self) -> dict[str, object]:
+        # The views into MjData would be pickled as copies, frozen at the time of the
+        # copy; a copy keeps the model, the data (MjData pickles its whole state, solver
+        # warm start included) and the number of checks, and binds new views.
+        return {"model": self.model, "data": self.data, "checks": self.checks}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.checks = state["checks"]
+        self._bind(state["model"], state["data"])
+
     def state(self, peak_force: float, error: str | None = None) -> BackendState:
         """The workpiece now: pose, wrench (N, N·mm, world axes) and the given peak force."""
         d = self.data
-        theta = d.qpos[3]
-        fx, fy, fz = self._wrench.tolist()
-        c, s = math.cos(theta), math.sin(theta)
-        wrench = np.array([s * fy - c * fx, -s * fx - c * fy, -d.sensordata[self._torque + 2], -fz])
+        wrench = board_wrench(d.qpos[3], self._wrench.tolist(), d.sensordata[self._torque + 2])
         return BackendState(
-            pose=d.qpos[_SWAP_Z_THETA],
-            wrench=wrench * _FORCE_SCALE,
-            peak_force=peak_force,
-            error=error,
+            pose=d.qpos[_SWAP_Z_THETA], wrench=wrench, peak_force=peak_force, error=error
         )
 
     def contact_force(self) -> float:
@@ -152,12 +199,7 @@ class ServoStepper:
 
     def _fault(self, warnings_before: int) -> str | None:
         d = self.data
-        if sum(self._warnings.tolist()) != warnings_before:
-            raised = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number > 0]
-            return f"MuJoCo warning during the step: {', '.join(raised)}"
-        if not math.isfinite(sum(d.qpos.tolist()) + sum(d.qvel.tolist())):
-            return "non-finite MuJoCo state"
-        return None
+        return simulation_fault(warnings_before, self._warnings.tolist(), d.qpos, d.qvel)
 
 
 class MujocoBackend:
@@ -165,21 +207,23 @@ class MujocoBackend:
 
     Args:
         spec: The socket.
-        control_dt: Control period (s); a whole number of physics steps.
-        contact_checks: How many times per control step the contact force is read
-            (evenly spaced), for ``peak_force``; must divide the physics steps.
+        control_dt: Control period (s), any that
+            :func:`~tolins.envs.episode.check_control_dt` allows.
+        contact_checks: How many times per control step the contact force is read, for
+            ``peak_force`` (chunks as in :class:`ServoStepper`), 1 … the physics steps;
+            default :func:`default_contact_checks` of the physics steps.
     """
 
-    def __init__(self, spec: SocketSpec, control_dt: float, contact_checks: int = 5) -> None:
+    def __init__(
+        self, spec: SocketSpec, control_dt: float, contact_checks: int | None = None
+    ) -> None:
         self.spec = spec
         self.model = mujoco.MjModel.from_xml_string(make_mjcf(spec))
         self.data = mujoco.MjData(self.model)
         substeps = physics_steps(self.model, control_dt)
-        if not 1 <= contact_checks <= substeps or substeps % contact_checks:
-            raise ValueError(
-                f"contact_checks={contact_checks!r} must divide the {substeps} physics "
-                "steps of a control step"
-            )
+        if contact_checks is None:
+            contact_checks = default_contact_checks(substeps)
+        check_int("contact_checks", contact_checks, minimum=1, maximum=substeps)
         self.substeps = substeps
         self.stepper = ServoStepper(self.model, self.data, contact_checks)
 

@@ -10,6 +10,9 @@ import gymnasium as gym
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 
 ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
+#: The batched env of every id (``gymnasium.make_vec(..., vectorization_mode=
+#: "vector_entry_point")``).
+VECTOR_ENTRY_POINT = "tolins.envs.vector:InsertionVectorEnv"
 #: Bent-pin std (mm) of the defective preset: about 60 % of its workpieces insert at
 #: the nominal goal (two pins, each inside a 0.2 mm clearance with probability √0.6).
 DEFECT_SIGMA = 0.12
@@ -77,8 +80,22 @@ GENERIC_ID = "tolins/Insert-v1"
 
 def register_envs() -> None:
     """Register every task (and the generic id) with gymnasium; safe to call twice."""
+    entry_points = {"entry_point": ENTRY_POINT, "vector_entry_point": VECTOR_ENTRY_POINT}
     for task in TASKS:
         if task.gym_id not in gym.registry:
-            gym.register(id=task.gym_id, entry_point=ENTRY_POINT, kwargs=task.env_kwargs)
+            gym.register(id=task.gym_id, kwargs=task.env_kwargs, **entry_points)
     if GENERIC_ID not in gym.registry:
-        gym.register(id=GENERIC_ID, entry_point=ENTRY_POINT)
+        gym.register(id=GENERIC_ID, **entry_points)
+
+
+def make_vec(env_id: str, num_envs: int = 1, **kwargs: Any) -> gym.vector.VectorEnv:
+    """``gymnasium.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point",
+    **kwargs)``: the batched :class:`~tolins.envs.vector.InsertionVectorEnv` of a tolins id
+    (``backend=``, ``num_threads=``, ``autoreset_mode=`` and every ``InsertionEnv``
+    keyword)."""
+    if env_id not in gym.registry or not str(env_id).startswith("tolins/"):
+        ids = sorted(i for i in gym.registry if i.startswith("tolins/"))
+        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(ids)}")
+    return gym.make_vec(
+        env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs
+    )

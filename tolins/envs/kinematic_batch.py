@@ -1,0 +1,64 @@
+"""The paper's simulator for many workpieces at once: one numpy call per workpiece shape.
+
+:class:`KinematicBatchPhysics` is the :class:`~tolins.envs.batch.BatchPhysics` of the
+vector env on the kinematic backend. The simulations that step together and share a
+workpiece (every one, unless bent pins are drawn per episode) move in one call of
+:func:`~tolins.envs.kinematic_backend.kinematic_step`, whose rows are independent: each
+is the single env's step bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tolins.envs.batch import BatchState
+from tolins.envs.episode import check_control_dt
+from tolins.envs.kinematic_backend import CONTACT_FORCE, kinematic_step
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import check_int
+
+
+class KinematicBatchPhysics:
+    """``num_envs`` kinematic workpieces, each of its own socket (default the nominal).
+
+    Args:
+        socket: The nominal socket.
+        num_envs: Number of workpieces.
+        control_dt: Control period (s).
+    """
+
+    def __init__(self, socket: SocketSpec, num_envs: int, control_dt: float) -> None:
+        self.num_envs = check_int("num_envs", num_envs, minimum=1)
+        self.control_dt = check_control_dt(control_dt)
+        self._sockets: list[SocketSpec] = [socket] * self.num_envs
+        self._pose = np.zeros((self.num_envs, 4))
+
+    def set_socket(self, index: int, socket: SocketSpec) -> None:
+        self._sockets[index] = socket
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        ids = np.asarray(ids, dtype=np.intp)
+        self._pose[ids] = poses
+        n = len(ids)
+        return BatchState(self._pose[ids], np.zeros((n, 4)), np.zeros(n))
+
+    def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
+        ids = np.asarray(ids, dtype=np.intp)
+        velocities = np.asarray(velocities, dtype=float)
+        wrench, peak = np.zeros((len(ids), 4)), np.zeros(len(ids))
+        groups: dict[int, list[int]] = {}
+        for row, i in enumerate(ids.tolist()):
+            groups.setdefault(id(self._sockets[i]), []).append(row)
+        for rows in groups.values():
+            rows = np.array(rows)
+            sims = ids[rows]
+            socket = self._sockets[sims[0]]
+            pose, wrench[rows], collided = kinematic_step(
+                socket, self._pose[sims], velocities[rows], self.control_dt
+            )
+            self._pose[sims] = pose
+            peak[rows] = np.where(collided, CONTACT_FORCE, 0.0)
+        return BatchState(self._pose[ids], wrench, peak)
+
+    def close(self) -> None:
+        """Nothing to release."""

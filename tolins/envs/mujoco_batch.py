@@ -1,0 +1,160 @@
+"""Contact physics of many workpieces at once: ``mujoco.batch`` on a native thread pool.
+
+:class:`MujocoBatch` is the :class:`~tolins.envs.batch.BatchPhysics` of the vector env on
+MuJoCo. It runs :class:`~tolins.envs.mujoco_backend.ServoStepper`'s control step (servo
+set-points re-anchored, ``contact_checks`` chunks of physics steps, the summed pin force
+read after each) on every simulation of a call in one ``Batch.step`` per chunk, with the
+GIL released. ``mujoco.batch`` is bit-identical to a loop of ``mj_step`` over one
+``MjData`` per simulation at any thread count (its documentation; tested here against
+the single env), so each simulation is the single env's, bit for bit.
+
+A simulation's workpiece may differ from the others' (a bent-pin draw): it then runs on a
+model compiled from its own MJCF (``Batch.set_models``), the model the single env would
+compile for it. All models of a socket family share one layout.
+"""
+
+from __future__ import annotations
+
+import os
+
+import mujoco
+import mujoco.batch
+import numpy as np
+
+from tolins.envs.batch import BatchState
+from tolins.envs.mujoco_backend import (
+    _FORCE_SCALE,
+    _SWAP_Z_THETA,
+    _touch_sensors,
+    board_wrench,
+    default_contact_checks,
+    physics_steps,
+    simulation_fault,
+)
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import check_int
+from tolins.mjcf import make_mjcf
+
+
+def default_threads() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _sequential_sum(columns: np.ndarray) -> np.ndarray:
+    """Row sums of ``columns`` ``(n, k)`` added left to right, as Python's ``sum`` of a row
+    (numpy's pairwise sum rounds differently from 8 columns on)."""
+    total = np.zeros(len(columns))
+    for j in range(columns.shape[1]):
+        total += columns[:, j]
+    return total
+
+
+class MujocoBatch:
+    """``num_envs`` MuJoCo simulations of one socket family (see the module docstring).
+
+    Args:
+        socket: The nominal socket; every simulation starts with it.
+        num_envs: Number of simulations.
+        control_dt: Control period (s), as the single env's.
+        num_threads: Threads of the batch (including the caller's); default: every core.
+        contact_checks: Contact-force reads per control step; default as the single env.
+    """
+
+    def __init__(
+        self,
+        socket: SocketSpec,
+        num_envs: int,
+        control_dt: float,
+        num_threads: int | None = None,
+        contact_checks: int | None = None,
+    ) -> None:
+        self.num_envs = check_int("num_envs", num_envs, minimum=1)
+        threads = default_threads() if num_threads is None else num_threads
+        self.num_threads = check_int("num_threads", threads, minimum=1)
+        self.socket = socket
+        self.model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
+        self.substeps = physics_steps(self.model, control_dt)
+        if contact_checks is None:
+            contact_checks = default_contact_checks(self.substeps)
+        self.checks = check_int("contact_checks", contact_checks, minimum=1, maximum=self.substeps)
+        self.batch = mujoco.batch.Batch(self.model, self.num_envs, nthread=self.num_threads)
+        self._models = [self.model] * self.num_envs
+        self._sockets: list[SocketSpec] = [socket] * self.num_envs
+        self._own_models = False
+        b = self.batch
+        self._qpos, self._qvel = b.bind("qpos"), b.bind("qvel")
+        self._act, self._ctrl = b.bind("act"), b.bind("ctrl")
+        self._sensordata = b.bind("sensordata")
+        touch, n_pins = _touch_sensors(self.model)
+        self._touch = slice(touch, touch + n_pins)
+        force = self.model.sensor("force").adr[0]
+        self._force = slice(force, force + 3)
+        self._torque_z = self.model.sensor("torque").adr[0] + 2
+
+    def set_socket(self, index: int, socket: SocketSpec) -> None:
+        if socket is self._sockets[index]:
+            return
+        self._sockets[index] = socket
+        same = socket is self.socket
+        self._models[index] = (
+            self.model if same else mujoco.MjModel.from_xml_string(make_mjcf(socket))
+        )
+        if self._own_models or not same:
+            self.batch.set_models(self._models)
+            self._own_models = True
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        ids = np.asarray(ids, dtype=np.intp)
+        self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
+        self._qpos[ids] = np.asarray(poses, dtype=float)[:, _SWAP_Z_THETA]
+        self._act[ids] = self._qpos[ids]
+        self.batch.forward(ids)
+        force = _sequential_sum(self._sensordata[ids, self._touch]) * _FORCE_SCALE
+        return self._state(ids, force, None)
+
+    def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
+        ids = np.asarray(ids, dtype=np.intp)
+        warning = self.batch.warning
+        before = [sum(warning[i, :, 1].tolist()) for i in ids.tolist()]
+        self._ctrl[ids] = np.asarray(velocities, dtype=float)[:, _SWAP_Z_THETA]
+        self._act[ids] = self._qpos[ids]
+        peak = np.zeros(len(ids))
+        chunk, extra = divmod(self.substeps, self.checks)
+        for i in range(self.checks):
+            n = chunk + (i < extra)
+            if n:
+                self.batch.step(ids, nstep=n)
+                touch = _sequential_sum(self._sensordata[ids, self._touch])
+                peak = np.where(touch > peak, touch, peak)  # max(peak, touch), as Python's
+        errors = tuple(
+            simulation_fault(b, warning[i, :, 1].tolist(), self._qpos[i], self._qvel[i])
+            for b, i in zip(before, ids.tolist(), strict=True)
+        )
+        return self._state(ids, peak * _FORCE_SCALE, errors)
+
+    def _state(
+        self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
+    ) -> BatchState:
+        qpos, sensordata = self._qpos[ids], self._sensordata[ids]
+        wrench = np.array(
+            [
+                board_wrench(q[3], s[self._force].tolist(), s[self._torque_z])
+                for q, s in zip(qpos, sensordata, strict=True)
+            ]
+        ).reshape(len(ids), 4)
+        return BatchState(qpos[:, _SWAP_Z_THETA], wrench, peak_force, errors)
+
+    def simulation(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Simulation ``index``'s model and a data at its state (forward kinematics run),
+        for rendering or inspection."""
+        model = self._models[index]
+        data = self.batch.get_data(index)
+        mujoco.mj_forward(model, data)
+        return model, data
+
+    def close(self) -> None:
+        """Nothing to release: the batch's threads end with it."""

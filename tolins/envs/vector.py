@@ -1,0 +1,233 @@
+"""The batched insertion env: ``num_envs`` episodes stepped together, each the single env's.
+
+``gymnasium.make_vec("tolins/Circle2x2-v1", num_envs=N, vectorization_mode=
+"vector_entry_point")`` and :func:`tolins.make_vec` build an :class:`InsertionVectorEnv`:
+one batched simulator (:mod:`tolins.envs.mujoco_batch` on ``mujoco.batch``'s thread pool,
+:mod:`tolins.envs.kinematic_batch` as numpy) under one
+:class:`~tolins.envs.episode_state.EpisodeState` per env, which does what ``InsertionEnv``
+does with its own random generator (noise, reward, success, defect draws). Env ``i`` reset
+with seed ``s`` runs the episodes of ``gymnasium.make(id)`` reset with seed ``s``, bit for
+bit (tested), at any thread count.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+
+from tolins.envs.batch import BatchPhysics
+from tolins.envs.episode import TaskSettings, check_action
+from tolins.envs.episode_state import EpisodeState
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import check_int
+from tolins.paper import A_MAX
+
+#: Batched simulators by name (``warp`` needs ``pip install 'tolins[warp]'``).
+BATCH_BACKENDS = ("mujoco", "kinematic", "warp")
+_AUTORESET = {mode.value: mode for mode in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)}
+
+
+def make_batch_physics(
+    backend: str,
+    socket: SocketSpec,
+    num_envs: int,
+    control_dt: float,
+    num_threads: int | None = None,
+    device: str | None = None,
+) -> BatchPhysics:
+    """The batched simulator ``backend`` of ``num_envs`` copies of ``socket``."""
+    if backend not in BATCH_BACKENDS:
+        raise ValueError(f"backend={backend!r}; allowed: {', '.join(map(repr, BATCH_BACKENDS))}")
+    if device is not None and backend != "warp":
+        raise ValueError(f"device={device!r} is for backend='warp' only; got backend={backend!r}")
+    if backend == "mujoco":
+        from tolins.envs.mujoco_batch import MujocoBatch
+
+        return MujocoBatch(socket, num_envs, control_dt, num_threads)
+    if backend == "kinematic":
+        from tolins.envs.kinematic_batch import KinematicBatchPhysics
+
+        return KinematicBatchPhysics(socket, num_envs, control_dt)
+    from tolins.envs.warp_batch import WarpBatch  # raises a clear ImportError without warp
+
+    return WarpBatch(socket, num_envs, control_dt, device=device or "cpu")
+
+
+def _per_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
+    """Gymnasium's rule: an int seeds env ``i`` with ``seed + i``; a list gives each its own."""
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        return [int(seed) + i for i in range(n)]
+    if isinstance(seed, (list, tuple)) and len(seed) == n:
+        return list(seed)
+    raise ValueError(f"seed={seed!r}; allowed: None, an int, or a list of {n} ints or None")
+
+
+class InsertionVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` insertion envs (``InsertionEnv``'s task, spaces and info) in one batch.
+
+    Args:
+        num_envs: Number of envs.
+        socket: The socket, as ``InsertionEnv``'s (the ids' presets pass theirs).
+        backend: ``"mujoco"`` (``mujoco.batch``), ``"kinematic"`` or ``"warp"``.
+        num_threads: Threads of the MuJoCo batch; default: every core of the machine.
+        device: Warp's device (``"cpu"``, ``"cuda:0"``), for ``backend="warp"`` only.
+        autoreset_mode: ``"NextStep"`` (gymnasium's default: an env that ended is reset by
+            the next ``step``, which returns its first observation, reward 0 and the reset's
+            info) or ``"SameStep"`` (reset within the step that ends it; that step's last
+            observation and info are in ``info["final_obs"]`` / ``info["final_info"]``).
+        goal: The goal of every env, as ``InsertionEnv``'s.
+        **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
+            ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
+            ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``).
+
+    ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
+    masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
+    each with its own; options (``pose``, ``goal``) apply to every env for that reset. A
+    reset or step that raises changes nothing; after a failed reset every step raises
+    ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+        "render_modes": [],
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        socket: SocketSpec | None = None,
+        *,
+        backend: str = "mujoco",
+        num_threads: int | None = None,
+        device: str | None = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        goal: Any = (0.0, 0.0, 0.0),
+        render_mode: str | None = None,
+        **task: Any,
+    ) -> None:
+        if socket is None:
+            raise ValueError("socket is required; allowed: a CircularSocket or PolygonSocket")
+        if render_mode is not None:
+            raise ValueError(f"render_mode={render_mode!r}; allowed: None (render one env)")
+        mode = getattr(autoreset_mode, "value", autoreset_mode)
+        if mode not in _AUTORESET:
+            raise ValueError(f"autoreset_mode={autoreset_mode!r}; allowed: {sorted(_AUTORESET)}")
+        self.num_envs = check_int("num_envs", num_envs, minimum=1)
+        self.settings = TaskSettings(socket, **task)
+        self.backend_name = backend
+        self.metadata = {**self.metadata, "autoreset_mode": _AUTORESET[mode]}
+        self.render_mode = None
+        self.physics = make_batch_physics(
+            backend, socket, self.num_envs, self.settings.control_dt, num_threads, device
+        )
+        self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
+        self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.episodes = [EpisodeState(self.settings, goal) for _ in range(self.num_envs)]
+        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+
+    @property
+    def sockets(self) -> list[SocketSpec]:
+        """Each env's workpiece of its current episode."""
+        return [episode.socket for episode in self.episodes]
+
+    def reset(
+        self,
+        *,
+        seed: int | list[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        seeds = _per_env_seeds(seed, self.num_envs)
+        if seed is not None:
+            self._np_random, self._np_random_seed = seeding.np_random(
+                seeds[0] if isinstance(seeds[0], int) else None
+            )
+        for i, s in enumerate(seeds):
+            if s is not None or self._rngs[i] is None:
+                self._rngs[i] = seeding.np_random(s)[0]
+        ids = np.arange(self.num_envs)
+        try:
+            plans = [self.episodes[i].plan(self._rngs[i], options) for i in ids]
+        except Exception:
+            for episode in self.episodes:
+                episode.broken = True
+            raise
+        observations, infos = self._begin(ids, plans)
+        self._autoreset[:] = False
+        return observations, infos
+
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        shape = np.shape(actions)
+        if shape != (self.num_envs, 4):
+            raise ValueError(
+                f"actions have shape {shape}; allowed: ({self.num_envs}, 4), one "
+                "[ux, uy, utheta, uz] per env"
+            )
+        same_step = self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+        running = np.flatnonzero(~self._autoreset)
+        for i in running:
+            self.episodes[i].check_running()
+        velocities = np.array([check_action(actions[i]) for i in running]).reshape(-1, 4)
+
+        observations = np.zeros((self.num_envs, 8))
+        rewards = np.zeros(self.num_envs)
+        terminations = np.zeros(self.num_envs, dtype=bool)
+        truncations = np.zeros(self.num_envs, dtype=bool)
+        infos: dict[str, Any] = {}
+        if running.size:
+            state = self.physics.step(running, velocities)
+            for k, i in enumerate(running.tolist()):
+                obs, reward, terminated, truncated, info = self.episodes[i].advance(
+                    state.row(k), self._rngs[i]
+                )
+                observations[i], rewards[i] = obs, reward
+                terminations[i], truncations[i] = terminated, truncated
+                if same_step and (terminated or truncated):
+                    info = {"final_obs": obs, "final_info": info}
+                infos = self._add_info(infos, info, i)
+        ended = terminations | truncations
+        resetting = ended if same_step else self._autoreset
+        if resetting.any():
+            ids = np.flatnonzero(resetting)
+            plans = [self.episodes[i].plan(self._rngs[i], None) for i in ids]
+            reset_observations, reset_infos = self._begin(ids, plans)
+            observations[ids] = reset_observations[ids]
+            for i in ids.tolist():
+                infos = self._add_info(infos, self._env_info(reset_infos, i), i)
+        self._autoreset = np.zeros(self.num_envs, bool) if same_step else ended
+        return observations, rewards, terminations, truncations, infos
+
+    def _begin(self, ids: np.ndarray, plans: list) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start the planned episodes of envs ``ids``: observations ``(num_envs, 8)`` (rows
+        ``ids`` set) and their infos."""
+        for i, plan in zip(ids, plans, strict=True):
+            self.physics.set_socket(int(i), plan.socket)
+        state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
+        observations, infos = np.zeros((self.num_envs, 8)), {}
+        for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
+            observations[i], info = self.episodes[i].begin(plan, state.row(k), self._rngs[i])
+            infos = self._add_info(infos, info, int(i))
+        return observations, infos
+
+    @staticmethod
+    def _env_info(infos: dict[str, Any], i: int) -> dict[str, Any]:
+        """Env ``i``'s entries of the batched ``infos`` (those whose ``_key`` mask is set)."""
+        return {
+            key: value[i]
+            for key, value in infos.items()
+            if not key.startswith("_") and infos[f"_{key}"][i]
+        }
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.physics.close()

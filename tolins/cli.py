@@ -29,8 +29,10 @@ def _record(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from tolins.learning.actors import make_actor
+    from tolins.learning.external import trust_pickle
     from tolins.record import record_episodes
 
+    trust_pickle(args.trust_pickle)  # this command's choice, not an earlier call's
     env = gym.make(args.env, backend=args.backend)
     try:
         policy = make_actor(args.policy, env.unwrapped.nominal_socket)
@@ -180,7 +182,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--policy",
         default="safe",
         help="safe, efficient (the experts), a tolins policy file PATH, an SB3 PATH.zip or "
-        "MODULE:NAME (as `tolins evaluate --policy`)",
+        "MODULE:NAME (imports that module: it runs its code; as `tolins evaluate --policy`)",
+    )
+    record.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="load an SB3 PATH.zip with SB3's own load, which unpickles and so runs code "
+        "stored in the zip (default: rebuilt from its JSON and weights, without pickle)",
     )
     record.add_argument(
         "--backend", default="mujoco", choices=["mujoco", "kinematic"], help="simulator"

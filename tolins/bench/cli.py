@@ -91,7 +91,17 @@ def add_evaluate_parser(commands: argparse._SubParsersAction) -> None:
         "sparse reward, summary and results.json schema) and print it beside the rows of "
         f"the same eval env. --policy: {ALLOWED}.",
     )
-    evaluate.add_argument("--policy", required=True, help="MODULE:NAME, PATH, PATH.zip or expert")
+    evaluate.add_argument(
+        "--policy",
+        required=True,
+        help="MODULE:NAME (imports that module: it runs its code), PATH, PATH.zip or expert",
+    )
+    evaluate.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="load an SB3 PATH.zip with SB3's own load, which unpickles and so runs code "
+        "stored in the zip (default: rebuilt from its JSON and weights, without pickle)",
+    )
     evaluate.add_argument("--env", required=True, help="eval env id, e.g. tolins/Circle2x2-v1")
     evaluate.add_argument("--episodes", type=positive_int, default=100, help="evaluation episodes")
     evaluate.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
@@ -118,6 +128,9 @@ def _evaluate(args: argparse.Namespace) -> int:
     )
 
     name = args.name or args.policy
+    from tolins.learning.external import trust_pickle
+
+    trust_pickle(args.trust_pickle)  # this command's choice, not an earlier call's
     try:
         source, rows = reference_rows(args.env, args.reference, backend=args.backend)
         entry = evaluate_policy(

@@ -33,7 +33,8 @@ from tolins.paper import A_MAX
 ALLOWED = (
     "an expert (safe, efficient), a tolins policy file (PATH, as `tolins train` writes, or "
     "its --out folder), "
-    "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act)"
+    "an SB3 model (PATH.zip) or MODULE:NAME (a callable or an object with predict/act; "
+    "imported, so it runs that module's code)"
 )
 
 Actor = Callable[[np.ndarray], np.ndarray]
@@ -117,8 +118,23 @@ def sb3_algorithm(path: str | os.PathLike) -> str:
     return "A2C" if algorithm == "PPO" and "clip_range" not in data else algorithm
 
 
-def load_sb3(path: str | os.PathLike) -> Actor:
+_TRUST_PICKLE = False
+
+
+def trust_pickle(enabled: bool = True) -> None:
+    """Let :func:`load_sb3` load zips with SB3's own ``load`` (unpickling: it runs code
+    stored in the zip) by default: ``--trust-pickle`` of ``evaluate`` and ``record``."""
+    global _TRUST_PICKLE
+    _TRUST_PICKLE = bool(enabled)
+
+
+def load_sb3(path: str | os.PathLike, *, trust_pickle: bool | None = None) -> Actor:
     """The deterministic actor of the SB3 model zip at ``path`` (needs ``tolins[rl]``).
+
+    By default nothing in the zip is unpickled (it could run code): the policy is rebuilt
+    from the JSON and weights (:mod:`tolins.learning.sb3_zip`), and a zip that cannot be
+    is refused with a message. ``trust_pickle=True`` (default: :func:`trust_pickle`'s
+    setting) loads it with SB3's ``load`` instead.
 
     The model's own spaces adapt it to the env: observations are cast to its observation
     dtype (``DtypeObservation`` during training), and its action bounds are mapped
@@ -133,7 +149,12 @@ def load_sb3(path: str | os.PathLike) -> Actor:
         raise ValueError(
             f"{path}: loading an SB3 zip needs stable-baselines3: pip install 'tolins[rl]'"
         ) from error
-    model = getattr(stable_baselines3, algorithm).load(path, device="cpu")
+    if _TRUST_PICKLE if trust_pickle is None else trust_pickle:
+        model = getattr(stable_baselines3, algorithm).load(path, device="cpu")
+    else:
+        from tolins.learning.sb3_zip import load_policy_without_pickle
+
+        model = load_policy_without_pickle(path, algorithm)
     space, actions = model.observation_space, model.action_space
     if space.shape != (8,) or actions.shape != (4,):
         raise ValueError(

@@ -27,15 +27,16 @@ episode) and a reset makes it independent of the env's earlier episodes, so the 
 does not depend on ``workers`` nor on the pool (threads or Ray actors,
 :mod:`tolins.learning.pool`). pycma
 samples from a private ``RandomState`` (its ``randn`` option; numpy's global RNG is left
-alone), pickled with the strategy into the checkpoint after every iteration, beside D
-and its optimiser: ``resume=True`` continues an interrupted run to the identical result.
+alone). The checkpoint, written after every iteration beside D and its optimiser, holds
+no pickle (a checkpoint is data: docs/security.md): the start ``x0`` and every fitness
+told to CMA-ES (arrays). ``resume=True`` rebuilds the strategy from the config and
+replays its ``ask``/``tell`` (deterministic, about 2 ms per iteration), checks that it
+passes through the stored means, and continues to the identical result.
 """
 
 from __future__ import annotations
 
 import contextlib
-import io
-import pickle
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -62,7 +63,7 @@ from tolins.learning.pool import (
 )
 
 CHECKPOINT = "checkpoint.pt"
-FORMAT = "tolins.rs_gail_run/1"
+FORMAT = "tolins.rs_gail_run/2"
 _EVAL = 0xE7A1
 
 
@@ -129,8 +130,8 @@ def _objective(episodes: list[Rollout], discriminator: Discriminator, alpha: flo
 
 
 def _make_es(start: np.ndarray, config: RSGailConfig, seed: int) -> cma.CMAEvolutionStrategy:
-    # A private RandomState (not numpy's global one that the ``seed`` option reseeds): it
-    # pickles with the strategy, so a resumed run draws exactly what an uninterrupted one does.
+    # A private RandomState (not numpy's global one that the ``seed`` option reseeds): a
+    # resumed run rebuilds it and replays its draws (_replay), as an uninterrupted one does.
     options = {
         "randn": np.random.RandomState(episode_seed(seed, 0xC3A)).randn,
         "popsize": config.popsize,
@@ -182,11 +183,12 @@ def train_rs_gail(
     if path.exists() and not resume:
         raise ValueError(f"{path} exists; pass resume=True (--resume) or choose another out")
     if resume and path.exists():
-        state = _load(path, metadata, discriminator)
+        state = _load(path, metadata, discriminator, config, seed)
         es, start, history = state["es"], state["iteration"], state["history"]
-        means = state["means"]
+        means, told, x0 = state["means"], state["told"], state["x0"]
     else:
-        es, start, history, means = _make_es(policy.get_flat(), config, seed), 0, [], []
+        x0 = np.array(policy.get_flat(), dtype=float)
+        es, start, history, means, told = _make_es(x0, config, seed), 0, [], [], []
     eval_seeds = [episode_seed(seed, _EVAL, e) for e in range(config.eval_episodes)]
     stopped = "iterations"
     bar = tqdm(total=config.iterations, initial=start, desc="RS-GAIL", disable=not progress)
@@ -208,10 +210,11 @@ def train_rs_gail(
             ]
             episodes = candidate_pool.rollouts(policy, workpieces, backend, candidates, seeds)
             fitness = [_objective(e, discriminator, alpha) for e in episodes]
-            es.tell(candidates, [-f for f in fitness])
+            told.append([-f for f in fitness])
+            es.tell(candidates, told[-1])
             row = _row(i, alpha, current, discriminator, fitness, es, episodes, began)
             history.append(row)
-            _save(path, es, i + 1, history, means, discriminator, metadata)
+            _save(path, x0, told, history, means, discriminator, metadata)
             write_curves_csv(out / "curves.csv", history)
             bar.set_postfix(
                 reward=f"{row['reward']:.1f}",
@@ -263,18 +266,17 @@ def _row(i, alpha, current, discriminator, fitness, es, episodes, began) -> dict
     }
 
 
-def _save(path, es, iteration, history, means, discriminator, metadata) -> None:
-    buffer = io.BytesIO()
-    pickle.dump(es, buffer)
+def _save(path, x0, told, history, means, discriminator, metadata) -> None:
     atomic_torch_save(
         path,
         {
             "format": FORMAT,
             "metadata": metadata,
-            "iteration": iteration,
+            "iteration": len(told),
             "history": history,
             "means": torch.as_tensor(np.array(means)),
-            "es": torch.frombuffer(bytearray(buffer.getvalue()), dtype=torch.uint8),
+            "x0": torch.as_tensor(x0),
+            "told": torch.as_tensor(np.array(told, dtype=float)),
             "discriminator": discriminator.full_state(),
         },
     )
@@ -300,15 +302,56 @@ def _check_metadata(path: Path, payload: dict[str, Any], metadata: dict[str, Any
         )
 
 
-def _load(path: Path, metadata: dict[str, Any], discriminator: Discriminator) -> dict[str, Any]:
+def _load(
+    path: Path,
+    metadata: dict[str, Any],
+    discriminator: Discriminator,
+    config: RSGailConfig,
+    seed: int,
+) -> dict[str, Any]:
     payload = load_payload(path, FORMAT)
     _check_metadata(path, payload, metadata)
-    discriminator.load_full_state(payload["discriminator"])
-    es = pickle.loads(payload["es"].numpy().tobytes())  # our own file, written by _save
-    means = list(payload["means"].numpy())
+    try:
+        iteration = int(payload["iteration"])
+        x0 = payload["x0"].numpy().astype(float)
+        told = payload["told"].numpy().astype(float).reshape(iteration, -1)
+        means = list(payload["means"].numpy().astype(float).reshape(iteration, x0.size))
+        history = list(payload["history"])[:iteration]
+        if len(history) != iteration or not np.isfinite(told).all():
+            raise ValueError("history or fitness values incomplete")
+        discriminator.load_full_state(payload["discriminator"])
+    except (KeyError, AttributeError, TypeError, ValueError, RuntimeError) as error:
+        raise ValueError(
+            f"{path}: not a complete RS-GAIL checkpoint ({type(error).__name__}: {error}); "
+            "allowed: a checkpoint this tolins wrote; delete it to start the run afresh"
+        ) from error
     return {
-        "es": es,
-        "iteration": payload["iteration"],
-        "history": payload["history"],
+        "es": _replay(path, x0, told, means, config, seed),
+        "iteration": iteration,
+        "history": history,
         "means": means,
+        "told": [list(row) for row in told],
+        "x0": x0,
     }
+
+
+def _replay(
+    path: Path,
+    x0: np.ndarray,
+    told: np.ndarray,
+    means: list[np.ndarray],
+    config: RSGailConfig,
+    seed: int,
+) -> cma.CMAEvolutionStrategy:
+    """The strategy after ``told`` (one row of fitness values per iteration), rebuilt from
+    the config: the same draws and updates as the interrupted run. ``ValueError`` unless
+    it passes through every stored mean (a checkpoint of another start or edited)."""
+    es = _make_es(x0, config, seed)
+    for i, fitness in enumerate(told):
+        if not np.array_equal(es.mean, means[i]) or len(fitness) != config.popsize:
+            raise ValueError(
+                f"{path}: its CMA-ES state does not replay (iteration {i}); allowed: a "
+                "checkpoint this tolins wrote for this config; delete it to start afresh"
+            )
+        es.tell(es.ask(), [float(f) for f in fitness])
+    return es

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import pickle
 from collections.abc import Iterator
 from dataclasses import asdict
 from pathlib import Path
@@ -26,8 +27,18 @@ def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:
         payload = torch.load(Path(path), map_location="cpu", weights_only=True)
     except FileNotFoundError:
         raise
+    except pickle.UnpicklingError as error:
+        if "weights only" in str(error).lower():  # torch's advice, weights_only=False, would
+            raise ValueError(  # run code from the file
+                f"{path} holds objects other than tensors and plain values; not loaded (that "
+                f"would run code from the file); allowed: a file tolins wrote in format {fmt!r}"
+            ) from None
+        raise ValueError(
+            f"{path} is not a readable torch checkpoint ({_first(error)}); allowed: a file "
+            f"tolins wrote in format {fmt!r}"
+        ) from error
     except Exception as error:
-        detail = f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
+        detail = _first(error)
         raise ValueError(
             f"{path} is not a readable torch checkpoint ({detail}); allowed: a file tolins "
             f"wrote in format {fmt!r}"
@@ -36,6 +47,12 @@ def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:
     if found != fmt:
         raise ValueError(f"{path} has format {found!r}; allowed: {fmt!r}")
     return payload
+
+
+def _first(error: BaseException) -> str:
+    """``Type: first line of the message`` (the type alone when it has none)."""
+    lines = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {lines[0]}" if lines else type(error).__name__
 
 
 def run_metadata(seed: int, **configs: Any) -> dict[str, Any]:

@@ -225,6 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench(commands)
     _add_evaluate(commands)
     _add_compare(commands)
+    _add_dataset(commands)
     return parser
 
 
@@ -244,6 +245,12 @@ def _add_compare(commands: argparse._SubParsersAction) -> None:
     from tolins.bench.compare_cli import add_compare_parser
 
     add_compare_parser(commands)
+
+
+def _add_dataset(commands: argparse._SubParsersAction) -> None:
+    from tolins.datasets.cli import add_dataset_parser
+
+    add_dataset_parser(commands)
 
 
 def _add_train(commands: argparse._SubParsersAction) -> None:

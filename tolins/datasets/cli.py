@@ -1,0 +1,126 @@
+"""``tolins dataset``: a policy's (or a recipe's) episodes as a local Minari dataset."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+from tolins import cli_checks
+
+_RECIPES = "expert-safe, expert-efficient, bc, random, mixed"
+_NAMED = {"safe": "expert-safe", "efficient": "expert-efficient"}
+
+
+def add_dataset_parser(commands: argparse._SubParsersAction) -> None:
+    """Add ``dataset`` to the ``tolins`` parser."""
+    parser = commands.add_parser(
+        "dataset", help="write a policy's episodes as a Minari dataset (docs/datasets.md)"
+    )
+    parser.add_argument(
+        "--env",
+        required=True,
+        type=cli_checks.preset_env_ids(),
+        help="a preset env id, e.g. tolins/Circle2x2-v1",
+    )
+    who = parser.add_mutually_exclusive_group(required=True)
+    who.add_argument(
+        "--policy",
+        help="safe, efficient, random, bc (cloned here from the safe expert), a tolins "
+        "policy file PATH, an SB3 PATH.zip or MODULE:NAME (imports that module)",
+    )
+    who.add_argument("--recipe", help=f"a named mix of policies: {_RECIPES}")
+    parser.add_argument("--episodes", type=cli_checks.positive_int, default=50, help="episodes")
+    parser.add_argument(
+        "--out",
+        required=True,
+        help="datasets root: the dataset goes to OUT/NAME (MINARI_DATASETS_PATH=OUT finds it)",
+    )
+    parser.add_argument(
+        "--name",
+        help="Minari dataset id (default: tolins/ENV/RECIPE-v0, e.g. "
+        "tolins/circle2x2/expert-safe-v0)",
+    )
+    parser.add_argument(
+        "--backend", default="mujoco", choices=["mujoco", "kinematic"], help="simulator"
+    )
+    parser.add_argument(
+        "--seed",
+        type=cli_checks.seed,
+        default=0,
+        help="seeds the episodes (those `tolins train --seed SEED` collects) and bc",
+    )
+    parser.set_defaults(run=_run)
+
+
+def default_name(env_id: str, label: str) -> str:
+    """``tolins/circle2x2/expert-safe-v0`` for ``tolins/Circle2x2-v1`` and ``expert-safe``."""
+    env = env_id.removeprefix("tolins/").rsplit("-v", 1)[0].lower()
+    slug = re.sub(r"[^a-z0-9]+", "-", label.lower()).strip("-") or "policy"
+    return f"tolins/{env}/{slug}-v0"
+
+
+def _label(args: argparse.Namespace) -> str:
+    if args.recipe is not None:
+        return args.recipe
+    entry = args.policy
+    if entry in _NAMED:
+        return _NAMED[entry]
+    if ":" in entry and not Path(entry).exists():
+        return entry.replace(":", "-")
+    return Path(entry.partition("=")[2] or entry).stem
+
+
+def _run(args: argparse.Namespace) -> int:
+    from tolins.datasets.sources import make_source, recipe_entries
+    from tolins.datasets.writer import check_target
+
+    prog = "tolins dataset"
+    try:
+        entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
+        name = args.name or default_name(args.env, _label(args))
+        cli_checks.output_folder("--out", args.out)
+        target = check_target(args.out, name)
+    except ValueError as error:
+        return cli_checks.fail(prog, error)
+    import gymnasium as gym
+    from tqdm import tqdm
+
+    from tolins.datasets.writer import write_dataset
+
+    socket = gym.spec(args.env).kwargs["socket"]
+    try:
+        sources = [
+            make_source(e, socket, env_id=args.env, backend=args.backend, seed=args.seed)
+            for e in entries
+        ]
+    except ValueError as error:
+        return cli_checks.fail(prog, error)
+    successes = 0
+    with tqdm(total=args.episodes, desc=f"dataset {name}", unit="episode") as bar:
+
+        def advance(record) -> None:
+            nonlocal successes
+            successes += bool(record.buffer.infos["success"][-1])
+            bar.update()
+
+        try:
+            write_dataset(
+                args.env,
+                sources,
+                args.episodes,
+                args.out,
+                name,
+                backend=args.backend,
+                seed=args.seed,
+                on_episode=advance,
+            )
+        except ValueError as error:
+            print(f"{prog}: {error}", file=sys.stderr)
+            return 2
+    print(
+        f"wrote {target}: {args.episodes} episodes, {successes} successful; "
+        f"MINARI_DATASETS_PATH={args.out} minari.load_dataset({name!r})"
+    )
+    return 0

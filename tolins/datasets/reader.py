@@ -1,0 +1,104 @@
+"""Read demonstrations from any Minari dataset of a tolins env, checked before use.
+
+A dataset is named by its folder (``ROOT/NAME``, or its ``data`` folder) or by its Minari
+id under ``MINARI_DATASETS_PATH`` (``~/.minari/datasets`` by default). It is accepted for
+an env ``ENV`` when its env spec is ``ENV``, its observation and action spaces are
+``ENV``'s, and, where it states them (``tolins_units``, written by ``tolins dataset``), its
+units are tolins's (mm, rad, N, N·mm; mm/s, rad/s). Anything else is refused with one line
+saying what differs.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tolins.datasets.envspec import tolins_ids
+from tolins.datasets.writer import UNITS
+from tolins.learning.demonstrations import Rollout
+
+
+def dataset_folder(source: str | os.PathLike) -> Path:
+    """The ``data`` folder of the dataset ``source`` (a folder or a local Minari id);
+    ``ValueError`` if it is neither."""
+    path = Path(source)
+    for candidate in (path / "data", path):
+        if (candidate / "metadata.json").is_file():
+            return candidate
+    if not path.exists() and not path.is_absolute():
+        from minari.storage.datasets_root_dir import get_dataset_path
+
+        by_id = Path(get_dataset_path(str(source))) / "data"
+        if (by_id / "metadata.json").is_file():
+            return by_id
+    raise ValueError(
+        f"--demos {source}: not a Minari dataset; allowed: a dataset folder (holding "
+        "data/metadata.json) or the id of a local dataset under MINARI_DATASETS_PATH"
+    )
+
+
+def open_dataset(source: str | os.PathLike, env_id: str | None = None) -> Any:
+    """The ``minari.MinariDataset`` at ``source``, checked against ``env_id`` (default: its
+    own env, which must be a tolins env). Raises ``ValueError`` naming what differs."""
+    import minari
+
+    folder = dataset_folder(source)
+    try:
+        dataset = minari.MinariDataset(folder)
+    except Exception as error:  # a corrupt or foreign folder: say so in one line
+        raise ValueError(
+            f"--demos {source}: unreadable ({type(error).__name__}: {error})"
+        ) from None
+    check_dataset(dataset, env_id, str(source))
+    return dataset
+
+
+def check_dataset(dataset: Any, env_id: str | None, label: str) -> None:
+    """Raise ``ValueError`` unless ``dataset`` holds episodes of the tolins env ``env_id``."""
+    spec = dataset.env_spec
+    found = None if spec is None else spec.id
+    if found is None or found not in tolins_ids():
+        raise ValueError(
+            f"--demos {label}: env {found!r} is not a tolins env; allowed: a dataset of "
+            f"one of {', '.join(tolins_ids())}"
+        )
+    if env_id is not None and found != env_id:
+        raise ValueError(f"--demos {label}: episodes of {found}; allowed: episodes of {env_id}")
+    reference = gym.spec(found)
+    env = gym.make(reference) if "socket" in reference.kwargs else None
+    if env is not None:
+        for name in ("observation_space", "action_space"):
+            theirs, ours = getattr(dataset, name), getattr(env.unwrapped, name)
+            if theirs != ours:
+                raise ValueError(f"--demos {label}: {name} {theirs}; allowed: {ours}")
+        env.close()
+    units = dataset.storage.metadata.get("tolins_units")
+    if units is not None and units != UNITS:
+        raise ValueError(f"--demos {label}: units {units}; allowed: {UNITS}")
+    if dataset.total_episodes < 1:
+        raise ValueError(f"--demos {label}: no episodes; allowed: a dataset with episodes")
+
+
+def to_rollout(episode: Any) -> Rollout:
+    """A Minari episode as the learners' :class:`~tolins.learning.demonstrations.Rollout`
+    (the ``T`` observations each action answered, the ``T`` actions)."""
+    infos = episode.infos or {}
+    success = infos["success"][-1] if "success" in infos else episode.terminations[-1]
+    collisions = infos["n_collisions"][-1] if "n_collisions" in infos else 0
+    return Rollout(
+        np.asarray(episode.observations[:-1], dtype=np.float64),
+        np.asarray(episode.actions, dtype=np.float64),
+        float(np.sum(episode.rewards)),
+        bool(success),
+        int(collisions),
+    )
+
+
+def load_demonstrations(source: str | os.PathLike, env_id: str | None = None) -> list[Rollout]:
+    """Every episode of the dataset ``source`` (checked by :func:`open_dataset`), in order."""
+    dataset = open_dataset(source, env_id)
+    return [to_rollout(episode) for episode in dataset.iterate_episodes()]

@@ -1,0 +1,201 @@
+"""Write a policy's episodes as a local Minari dataset (hdf5), atomically.
+
+Layout (Minari's own): ``ROOT/NAME/data/{metadata.json, main_data.hdf5}``, so that
+``MINARI_DATASETS_PATH=ROOT`` makes ``minari.load_dataset(NAME)`` find it. Per step, beside
+``observations`` (``T + 1``), ``actions`` (``T``, clipped as the env applied them),
+``rewards``, ``terminations`` and ``truncations``, the ``infos`` group has ``T + 1`` rows
+(the reset's first, Minari's convention) of :data:`STEP_INFO`: the true pose, the true
+wrench, the peak force, the collision flag and count, success, the step, the goal and
+every reward term. Per episode (``episode.attrs`` / ``dataset.storage.get_episode_metadata``):
+``seed``, ``policy``, ``socket`` (the workpiece's spec as JSON, bent pins included),
+``pin_offsets`` (``(n_pins, 2)`` mm, the ground-truth defects), ``error`` (``""`` unless a
+simulator fault truncated it).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from tolins.datasets.envspec import dataset_env_spec, socket_to_json
+from tolins.datasets.sources import Source
+from tolins.envs.episode import check_action
+
+#: The ``info`` keys stored per step (every key of the env's info but ``error``).
+STEP_INFO = (
+    "pose",
+    "wrench",
+    "peak_force",
+    "collision",
+    "n_collisions",
+    "success",
+    "step",
+    "goal",
+    "reward_success",
+    "reward_collision",
+    "reward_approach",
+    "reward_height",
+    "reward_alignment",
+    "reward_depth",
+    "reward_offset",
+)
+#: The units of the observation and action entries (``InsertionEnv``'s tables), stored in
+#: the dataset's metadata as ``tolins_units`` and checked when a dataset is read.
+UNITS = {
+    "observation": ["mm", "mm", "rad", "mm", "N", "N", "N·mm", "N"],
+    "action": ["mm/s", "mm/s", "rad/s", "mm/s"],
+}
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """One episode as Minari stores it, with its metadata."""
+
+    buffer: Any  # minari.data_collector.EpisodeBuffer
+    metadata: dict[str, Any]
+
+
+def episode_seeds(seed: int, episodes: int) -> list[int]:
+    """The episode seeds of a dataset with ``seed``: the ones ``tolins train --seed SEED``
+    draws for its (first) env's demonstrations (:func:`tolins.learning.runs.demonstrations`),
+    so that a safe-expert dataset of the same seed holds the very same episodes."""
+    state = np.random.SeedSequence([seed * 1000, 0xDE70]).generate_state(episodes)
+    return [int(s) for s in state]
+
+
+def record_episode(env: gym.Env, policy: Callable, seed: int, name: str, index: int):
+    """Run ``policy`` in ``env`` from ``reset(seed=seed)``; the episode as an
+    :class:`EpisodeRecord` with id ``index``."""
+    from minari.data_collector import EpisodeBuffer
+
+    observation, info = env.reset(seed=seed)
+    socket = env.unwrapped.socket
+    observations, infos, actions, rewards, terms, truncs = [observation], [info], [], [], [], []
+    done = False
+    while not done:
+        action = check_action(policy(observation))
+        observation, reward, terminated, truncated, info = env.step(action)
+        for sequence, value in zip(
+            (observations, infos, actions, rewards, terms, truncs),
+            (observation, info, action, reward, terminated, truncated),
+            strict=True,
+        ):
+            sequence.append(value)
+        done = terminated or truncated
+    buffer = EpisodeBuffer(
+        id=index,
+        seed=seed,
+        observations=np.array(observations),
+        actions=np.array(actions),
+        rewards=[float(r) for r in rewards],
+        terminations=[bool(t) for t in terms],
+        truncations=[bool(t) for t in truncs],
+        infos={key: np.array([step[key] for step in infos]) for key in STEP_INFO},
+    )
+    offsets = getattr(socket, "offsets", np.zeros((socket.n_pins, 2)))
+    metadata = {
+        "policy": name,
+        "socket": json.dumps(socket_to_json(socket)),
+        "pin_offsets": np.asarray(offsets, dtype=float),
+        "error": str(info.get("error") or ""),
+    }
+    return EpisodeRecord(buffer, metadata)
+
+
+def check_target(root: str | os.PathLike, name: str) -> Path:
+    """The folder ``ROOT/NAME`` a dataset would take; ``ValueError`` for a malformed Minari
+    id or a folder that exists (nothing is created)."""
+    from minari.dataset.minari_dataset import parse_dataset_id
+
+    try:
+        parse_dataset_id(name)
+    except ValueError:
+        raise ValueError(
+            f"--name {name!r} is not a Minari dataset id; allowed: (namespace/)name-vN, "
+            "e.g. tolins/circle2x2/expert-safe-v0"
+        ) from None
+    target = Path(root) / name
+    if target.exists():
+        raise ValueError(f"{target} exists; allowed: a new --name or --out (or remove it)")
+    return target
+
+
+def write_dataset(
+    env_id: str,
+    sources: Sequence[Source],
+    episodes: int,
+    root: str | os.PathLike,
+    name: str,
+    *,
+    backend: str = "mujoco",
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
+    description: str = "",
+    on_episode: Callable[[EpisodeRecord], None] | None = None,
+) -> Path:
+    """Write ``episodes`` episodes of ``env_id`` on ``backend`` to ``ROOT/NAME`` (episode
+    ``i`` acts with ``sources[i % len(sources)]``, seeded by :func:`episode_seeds`).
+    ``env_kwargs`` go to the env (``socket=`` for ``tolins/Insert-v1``) and into its spec.
+
+    The dataset is built in a hidden folder beside its place and renamed onto it at the
+    end: on any error or Ctrl-C the hidden folder is removed and nothing is left.
+    """
+    from minari.dataset.minari_storage import MinariStorage
+
+    target = check_target(root, name)
+    spec = dataset_env_spec(env_id, **(env_kwargs or {}), backend=backend)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    temp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    env = gym.make(spec)
+    try:
+        storage = MinariStorage.new(
+            temp / "data",
+            observation_space=env.observation_space,
+            action_space=env.action_space,
+            env_spec=spec,
+        )
+        for index, seed_i in enumerate(episode_seeds(seed, episodes)):
+            source = sources[index % len(sources)]
+            record = record_episode(env, source.make(seed_i), seed_i, source.name, index)
+            storage.update_episodes([record.buffer])
+            storage.update_episode_metadata([record.metadata], [index])
+            if on_episode is not None:
+                on_episode(record)
+        storage.update_metadata(_metadata(name, env_id, backend, seed, sources, description))
+        os.rename(temp, target)
+    except BaseException:
+        shutil.rmtree(temp, ignore_errors=True)
+        raise
+    finally:
+        env.close()
+    return target
+
+
+def _metadata(name, env_id, backend, seed, sources, description) -> dict[str, Any]:
+    import minari
+
+    import tolins
+
+    policies = ", ".join(dict.fromkeys(s.name for s in sources))
+    return {
+        "dataset_id": name,
+        "algorithm_name": policies,
+        "author": {"tolins"},
+        "description": description or f"{policies} on {env_id} ({backend} backend), seed {seed}",
+        "minari_version": minari.__version__,
+        "requirements": [f"tolins=={tolins.__version__}"],
+        "tolins_version": tolins.__version__,
+        "tolins_env": env_id,
+        "tolins_backend": backend,
+        "tolins_seed": int(seed),
+        "tolins_units": UNITS,
+    }

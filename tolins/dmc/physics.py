@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
+import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
@@ -16,16 +20,37 @@ class InsertionPhysics(dm_mujoco.Physics):
 
     ``step(nstep)`` is one control step: it re-anchors the servos, runs ``nstep`` physics
     steps under the velocity last given to :meth:`command`, reading the pins' contact
-    force after each of 5 evenly sized chunks, and stores the result in
+    force after each of 5 chunks (:class:`ServoStepper`; evenly sized at the default
+    0.25 s), and stores the result in
     :attr:`last_state` (a simulator fault is reported there as ``error`` instead of a
-    ``PhysicsError``). ``legacy_step`` is ignored. Everything else, ``named``,
-    ``render``, ``get_state``/``set_state``, is plain dm_control.
+    ``PhysicsError``). ``legacy_step`` is ignored. A reset whose task raises changes
+    nothing: :meth:`reset_context` puts the data back as it was. Everything else,
+    ``named``, ``render``, ``get_state``/``set_state``, is plain dm_control.
     """
 
     def _reload_from_data(self, data: dm_mujoco.wrapper.MjData) -> None:
         super()._reload_from_data(data)
         self.stepper = ServoStepper(self.model.ptr, self.data.ptr)
         self.last_state = self.stepper.state(self.stepper.contact_force())
+        self._saved: mujoco.MjData | None = None
+
+    @contextlib.contextmanager
+    def reset_context(self) -> Iterator[InsertionPhysics]:
+        """dm_control's reset context (reset the data, then the task places the workpiece);
+        an exception inside it restores the data, and the last state, as they were."""
+        model, data = self.model.ptr, self.data.ptr
+        if self._saved is None:
+            self._saved = mujoco.MjData(model)
+        mujoco.mj_copyData(self._saved, model, data)
+        last_state = self.last_state
+        try:
+            with super().reset_context():
+                yield self
+        except BaseException:
+            if self.model.ptr is model:
+                mujoco.mj_copyData(data, model, self._saved)
+                self.last_state = last_state
+            raise
 
     @classmethod
     def from_spec(cls, spec: SocketSpec) -> InsertionPhysics:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import collections
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from dm_control.rl import control
 from dm_env import specs
@@ -63,7 +64,14 @@ class Insert(control.Task):
     draws what ``InsertionEnv.reset(seed=...)`` draws): the initial pose from
     ``initial_pose`` around the goal, or the fixed ``pose`` ``[x, y, theta, z]``; with
     ``defect_sigma``, a new bent-pin workpiece every episode, for which the physics is
-    rebuilt from its MJCF (``InsertionPhysics.reload_from_spec``, about 5 ms).
+    rebuilt from its MJCF (``InsertionPhysics.reload_from_spec``, about 5 ms). A fixed
+    ``pose`` below the board's top (pins in their holes) is for a nominal workpiece only:
+    with ``defect_sigma`` it is refused, as a bent workpiece may not fit there.
+
+    **Failed reset**: a reset validates the episode (workpiece, pose) before it changes
+    anything; if it raises (e.g. a ``pose`` set on the task since that is out of range),
+    the task, its random state and the physics stay as they were, and every step raises
+    ``gymnasium.error.ResetNeeded`` until a reset succeeds.
     """
 
     def __init__(
@@ -96,30 +104,48 @@ class Insert(control.Task):
         self.socket = socket
         self.goal = check_goal(goal)
         self.pose = None if pose is None else check_pose(socket, pose)
+        if self.pose is not None and self.pose[3] < 0 and defect_sigma is not None:
+            raise ValueError(
+                f"pose={self.pose.tolist()!r} has the pins in the holes, which a bent "
+                "workpiece (defect_sigma) may not fit; allowed with defect_sigma: z ≥ 0"
+            )
         self.random = _generator(random)
         self.score = EpisodeScore(self.settings)
         self.last_score = NO_SCORE
         self.error: str | None = None
         self._observation = np.zeros(8)
+        self._reset_failed = False
         super().__init__()
 
     def initialize_episode(self, physics: InsertionPhysics) -> None:
-        """Draw the workpiece (defective domain) and the initial pose; place the workpiece."""
-        if self.settings.defect_sigma is not None:
-            self.socket = self.settings.draw_socket(self.random)
-            physics.reload_from_spec(self.socket)
-        if self.pose is not None:
-            pose = check_pose(self.socket, self.pose)
-        else:
-            pose = check_pose(
-                self.socket, self.settings.initial_pose.sample(self.random, self.goal)
-            )
+        """Draw the workpiece (defective domain) and the initial pose, check them, then
+        place the workpiece; a failure changes nothing (see **Failed reset**)."""
+        random_state = self.random.bit_generator.state
+        try:
+            socket = self.settings.draw_socket(self.random)
+            if self.pose is not None:
+                pose = check_pose(socket, self.pose)
+            else:
+                pose = check_pose(socket, self.settings.initial_pose.sample(self.random, self.goal))
+        except BaseException:
+            self.random.bit_generator.state = random_state
+            self._reset_failed = True
+            raise
+        if socket is not self.socket:
+            physics.reload_from_spec(socket)
+        self.socket = socket
         self.score.reset()
         self.last_score, self.error = NO_SCORE, None
         self._observation = self.settings.observe(physics.set_pose(pose), self.goal, self.random)
+        self._reset_failed = False
 
     def before_step(self, action: Any, physics: InsertionPhysics) -> None:
-        """Check and clip ``action`` and command it."""
+        """Check and clip ``action`` and command it; ``gymnasium.error.ResetNeeded`` after a
+        failed reset."""
+        if self._reset_failed:
+            raise gym.error.ResetNeeded(
+                "the last reset failed; call reset() (after fixing what it raised) before stepping"
+            )
         physics.command(check_action(action))
 
     def after_step(self, physics: InsertionPhysics) -> None:

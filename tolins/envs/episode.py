@@ -15,10 +15,23 @@ import numpy as np
 from tolins.envs.backend import BackendState
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.reward import RewardTerms, check_reward_mode, reward_terms
-from tolins.geometry.defects import sample_defects
+from tolins.geometry.defects import check_defect_sigma, sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
-from tolins.geometry.validation import check_int, check_positive, finite_vector
-from tolins.geometry.workspace import GOAL_RANGE, THETA_RANGE, XY_RANGE, Z_MAX, in_holes
+from tolins.geometry.validation import (
+    check_int,
+    check_positive,
+    check_real,
+    finite_vector,
+    real_array,
+)
+from tolins.geometry.workspace import (
+    GOAL_RANGE,
+    PIN_LENGTH,
+    THETA_RANGE,
+    XY_RANGE,
+    Z_MAX,
+    in_holes,
+)
 from tolins.mjcf.model import TIMESTEP
 from tolins.paper import (
     A_MAX,
@@ -32,27 +45,36 @@ from tolins.paper import (
 _A_MIN = -A_MAX
 #: Longest control period (s): four times the paper's.
 MAX_CONTROL_DT = 1.0
+#: Largest noise std of any measured quantity (mm, rad, N, N·mm): far beyond any sensor,
+#: it keeps every observation finite.
+MAX_NOISE_STD = 1e3
 
 
 def check_control_dt(control_dt: object) -> float:
     """``control_dt`` (s) if finite, in ``(0, MAX_CONTROL_DT]`` and a whole number of MuJoCo
     physics steps (:data:`~tolins.mjcf.model.TIMESTEP`); the same rule on every backend."""
     allowed = (
-        f"allowed: a multiple of the {TIMESTEP} s physics step in (0, {MAX_CONTROL_DT}] s "
+        f"a multiple of the {TIMESTEP} s physics step in (0, {MAX_CONTROL_DT}] s "
         f"(the paper's: {CONTROL_DT})"
     )
-    try:
-        value = float(control_dt)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"control_dt={control_dt!r} is not a number; {allowed}") from error
-    steps = round(value / TIMESTEP) if np.isfinite(value) else 0
+    value = check_real("control_dt", control_dt, allowed)
+    steps = round(value / TIMESTEP)
     if not 0 < value <= MAX_CONTROL_DT or abs(steps * TIMESTEP - value) > 1e-9:
-        raise ValueError(f"control_dt={control_dt!r} is not allowed; {allowed}")
+        raise ValueError(f"control_dt={control_dt!r} is not allowed; allowed: {allowed}")
     return value
 
 
-def _check_initial_pose(distribution: InitialPoseDistribution) -> None:
-    """Every pose ``distribution`` can draw around any allowed goal is in the servo range."""
+def _check_initial_pose(distribution: object) -> InitialPoseDistribution:
+    """``distribution`` (``None``: the default one) if it is an
+    :class:`InitialPoseDistribution` whose every pose around any allowed goal is in the
+    servo range."""
+    if distribution is None:
+        return InitialPoseDistribution()
+    if not isinstance(distribution, InitialPoseDistribution):
+        raise ValueError(
+            f"initial_pose={distribution!r} is not an InitialPoseDistribution; allowed: None "
+            "or InitialPoseDistribution(radius_min=..., ...)"
+        )
     limits = (
         ("radius_max", distribution.radius_max, XY_RANGE - GOAL_RANGE[0]),
         ("theta_max", distribution.theta_max, THETA_RANGE - GOAL_RANGE[2]),
@@ -64,6 +86,7 @@ def _check_initial_pose(distribution: InitialPoseDistribution) -> None:
                 f"initial_pose.{name}={value!r} reaches beyond the servo range; allowed: "
                 f"{name} ≤ {limit:.4g}"
             )
+    return distribution
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,11 +96,15 @@ class TaskSettings:
     Attributes:
         socket: The nominal socket.
         measurement_noise: Pose noise std ``[x, y, theta, z]`` (mm, rad); a scalar broadcasts.
-        force_noise: Wrench noise std ``[Fx, Fy, q_theta, Fz]`` (N, N·mm).
+        force_noise: Wrench noise std ``[Fx, Fy, q_theta, Fz]`` (N, N·mm). Each std in
+            ``[0, MAX_NOISE_STD]``.
         horizon: Steps before truncation (k_max).
-        success_depth: Depth of the pin tips below the board that counts as success (mm).
+        success_depth: Depth of the pin tips below the board that counts as success (mm),
+            less than the pins' length (the carrier stops the tips at ``z = -4``).
         collision_force: Summed normal contact force above which a step collides (N).
-        defect_sigma: Bent-pin std (mm) re-drawn every episode, or ``None``.
+        defect_sigma: Bent-pin std (mm) re-drawn every episode, or ``None``; at most the
+            socket's :func:`~tolins.geometry.defects.max_defect_sigma` (a workpiece with a
+            pin out of its cell is re-drawn, :func:`~tolins.geometry.defects.sample_defects`).
         initial_pose: Distribution of the initial pose around the goal.
         control_dt: Control period (s), see :func:`check_control_dt`.
         reward_mode: ``sparse`` (the paper's), ``dense`` or ``normalized_dense``
@@ -102,20 +129,26 @@ class TaskSettings:
         if self.defect_sigma is not None:
             if not isinstance(self.socket, CircularSocket):
                 raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
-            set_(self, "defect_sigma", check_positive("defect_sigma", self.defect_sigma))
+            sigma = check_defect_sigma(self.socket, self.defect_sigma, "defect_sigma")
+            set_(self, "defect_sigma", sigma)
         for name, what in (
             ("measurement_noise", "[x, y, theta, z]"),
             ("force_noise", "[Fx, Fy, q_theta, Fz]"),
         ):
-            std = finite_vector(name, getattr(self, name), 4, f"std ≥ 0 for {what}")
-            if np.any(std < 0):
-                raise ValueError(f"{name}={std.tolist()!r} is negative; allowed: std ≥ 0")
+            allowed = f"0 ≤ std ≤ {MAX_NOISE_STD:g} for {what}"
+            std = finite_vector(name, getattr(self, name), 4, allowed)
+            if np.any(std < 0) or np.any(std > MAX_NOISE_STD):
+                raise ValueError(f"{name}={std.tolist()!r} is out of range; allowed: {allowed}")
             set_(self, name, std)
         set_(self, "horizon", check_int("horizon", self.horizon, minimum=1))
         set_(self, "success_depth", check_positive("success_depth", self.success_depth))
+        if self.success_depth >= PIN_LENGTH:
+            raise ValueError(
+                f"success_depth={self.success_depth!r} cannot be reached: the carrier stops the "
+                f"pin tips at z = -{PIN_LENGTH:g} mm; allowed: 0 < success_depth < {PIN_LENGTH:g}"
+            )
         set_(self, "collision_force", check_positive("collision_force", self.collision_force, "N"))
-        set_(self, "initial_pose", self.initial_pose or InitialPoseDistribution())
-        _check_initial_pose(self.initial_pose)
+        set_(self, "initial_pose", _check_initial_pose(self.initial_pose))
         set_(self, "control_dt", check_control_dt(self.control_dt))
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "_noise_std", np.concatenate([self.measurement_noise, self.force_noise]))
@@ -140,12 +173,10 @@ class TaskSettings:
 
 
 def check_action(action: Any) -> np.ndarray:
-    """``action`` ``[ux, uy, utheta, uz]`` as floats clipped to ±a_max; NaN, inf or a wrong
-    shape raise ``ValueError``."""
-    try:
-        action = np.asarray(action, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"action={action!r} is not numeric; allowed: 4 floats") from error
+    """``action`` ``[ux, uy, utheta, uz]`` as floats clipped to ±a_max; NaN, inf, a wrong
+    shape or anything but real numbers (ints and floats; a bool, string or complex number is
+    not a velocity) raise ``ValueError``."""
+    action = real_array("action", action, "4 real numbers [ux, uy, utheta, uz]")
     if action.shape != (4,):
         raise ValueError(f"action has shape {action.shape}; allowed: (4,) = [ux, uy, utheta, uz]")
     if not np.isfinite(action).all():

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tolins.geometry.validation import check_real
+
 
 @dataclass(frozen=True)
 class InitialPoseDistribution:
@@ -15,7 +17,8 @@ class InitialPoseDistribution:
     uniformly random direction; theta is uniform in ``±theta_max`` (rad); the height of
     the pin tips above the board is uniform in ``[z_min, z_max]`` (mm). The defaults
     are chosen so that the safe expert needs about 35 control steps and the efficient
-    one about 30, as in the paper (measured by ``tolins demo``).
+    one about 30, as in the paper (measured by ``tolins demo``). Every field must be a
+    finite real number (``ValueError`` naming it otherwise).
     """
 
     radius_min: float = 1.0
@@ -25,6 +28,9 @@ class InitialPoseDistribution:
     z_max: float = 18.0
 
     def __post_init__(self) -> None:
+        for name in ("radius_min", "radius_max", "theta_max", "z_min", "z_max"):
+            value = check_real(name, getattr(self, name), "a finite number (mm or rad)")
+            object.__setattr__(self, name, value)
         if not 0 <= self.radius_min <= self.radius_max:
             raise ValueError(
                 f"radius_min={self.radius_min!r}, radius_max={self.radius_max!r}; "

@@ -44,6 +44,9 @@ def physics_steps(model: mujoco.MjModel, control_dt: float) -> int:
     return round(check_control_dt(control_dt) / model.opt.timestep)
 
 
+#: ``opt.disableflags`` bit that turns off every sensor.
+_SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+
 #: Contact-force reads per control step: five, as long as a step has five physics steps.
 CONTACT_CHECKS = 5
 
@@ -180,7 +183,7 @@ class ServoStepper:
 
     def advance(self, nstep: int) -> BackendState:
         """Re-anchor the servos and run ``nstep`` physics steps under the current command."""
-        m, d = self.model, self.data
+        d = self.data
         warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
         touch, peak = self._touch, 0.0
@@ -188,9 +191,29 @@ class ServoStepper:
         for i in range(self.checks):
             n = chunk + (i < extra)
             if n:
-                mujoco.mj_step(m, d, nstep=n)
+                self._physics_steps(n)
                 peak = max(peak, sum(touch.tolist()))
         return self.state(peak * _FORCE_SCALE, self._fault(warnings_before))
+
+    #: Compute the sensors only in the last physics step before each read of them: the
+    #: state and every value read are the same bit for bit (sensors do not act on the
+    #: state), and the touch sensors cost O(pins × contacts) per step. ``False``: in
+    #: every step, as before issue 19 (for side-by-side benchmarks).
+    lazy_sensors = True
+
+    def _physics_steps(self, n: int) -> None:
+        """``n`` physics steps. With :attr:`lazy_sensors` the model's sensors are switched
+        off for all but the last, so the model must not be stepped elsewhere meanwhile."""
+        m, d = self.model, self.data
+        if self.lazy_sensors and n > 1:
+            flags = m.opt.disableflags
+            m.opt.disableflags = flags | _SENSORS_OFF
+            try:
+                mujoco.mj_step(m, d, nstep=n - 1)
+            finally:
+                m.opt.disableflags = flags
+            n = 1
+        mujoco.mj_step(m, d, nstep=n)
 
     def step(self, velocity: np.ndarray, nstep: int) -> BackendState:
         """Command ``velocity`` ``[ux, uy, utheta, uz]`` for ``nstep`` physics steps."""

@@ -114,13 +114,7 @@ class CircularSocket:
             raise ValueError(
                 f"pin_offsets={array.tolist()!r} contains NaN or inf; allowed: finite mm"
             )
-        # A pin must stay in its cell; along an axis with a single hole, within MAX_PIN_OFFSET.
-        half_cell = np.array(
-            [
-                self.col_pitch / 2 - self.pin_radius if self.cols > 1 else MAX_PIN_OFFSET,
-                self.row_pitch / 2 - self.pin_radius if self.rows > 1 else MAX_PIN_OFFSET,
-            ]
-        )
+        half_cell = self.offset_limit
         outside = np.any(np.abs(array) > half_cell, axis=1)
         if np.any(outside):
             pin = int(np.argmax(outside))
@@ -146,6 +140,18 @@ class CircularSocket:
     def pin_reach(self) -> float:
         """Radius of the smallest circle about a pin's centre that holds the pin (mm)."""
         return self.pin_radius
+
+    @property
+    def offset_limit(self) -> np.ndarray:
+        """Largest ``(|dx|, |dy|)`` (mm) of a pin offset, so that a pin stays in its cell:
+        half the pitch less a pin radius (neighbours cannot touch); along an axis with a
+        single hole, :data:`MAX_PIN_OFFSET`."""
+        return np.array(
+            [
+                self.col_pitch / 2 - self.pin_radius if self.cols > 1 else MAX_PIN_OFFSET,
+                self.row_pitch / 2 - self.pin_radius if self.rows > 1 else MAX_PIN_OFFSET,
+            ]
+        )
 
     @property
     def hole_circumradius(self) -> float:

@@ -25,7 +25,7 @@ import torch
 
 from tolins.inference.adaptive import InferenceGuidedPolicy
 from tolins.learning.actors import make_actor
-from tolins.rollout import Summary, run_episode, summarise
+from tolins.rollouts.episodes import Summary, run_episode, summarise
 
 FIRST_SEED = 10_000
 VARIANTS = ("", "+lift", "+inference", "+inference_contact")

@@ -20,7 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 import torch
 
 from tolins.bench.evaluation import FIRST_SEED, eval_seeds, evaluate
-from tolins.rollout import Summary, summarise
+from tolins.rollouts.episodes import Summary, summarise
 
 
 def figures(entry: str, env_id: str, episodes: int, backend: str) -> Summary:

@@ -9,8 +9,8 @@ What it measures, in one process:
 
 1. **RS-GAIL iterations.** π_n on ``Circle2x2`` (MuJoCo) from a BC policy with the quick
    profile's population (16 candidates × 4 episodes, 8 curve episodes), ``--iterations``
-   iterations, first on :class:`tolins.learning.pool.ThreadPool` (2 threads, the local
-   default), then on :class:`tolins.learning.ray_pool.RayPool` (one actor per CPU of a
+   iterations, first on :class:`tolins.rollouts.pool.VectorPool` (2 threads, the local
+   default), then on :class:`tolins.rollouts.ray_pool.RayPool` (one actor per CPU of a
    ``ray.init(num_cpus=CPUS)``); the first iteration's time (it starts the actors) and,
    from the median of the later ones, iterations per minute and env steps per second of
    each, their ratio, and whether both searches are identical (they must be).
@@ -43,15 +43,15 @@ def rs_gail_throughput(iterations: int, cpus: int) -> dict:
     from tolins.learning.bc import behaviour_clone
     from tolins.learning.demonstrations import collect
     from tolins.learning.policy_config import BCConfig, RSGailConfig
-    from tolins.learning.pool import ThreadPool
-    from tolins.learning.ray_pool import RayPool
     from tolins.learning.rs_gail import Workpiece, train_rs_gail
+    from tolins.rollouts.pool import VectorPool
+    from tolins.rollouts.ray_pool import RayPool
 
     demos = collect(ENV, "safe", 50, seed=0, backend="mujoco")
     policy = behaviour_clone(demos, BCConfig(epochs=200), seed=0).policy
     config = RSGailConfig(iterations=iterations, popsize=16, episodes=4, eval_episodes=8)
     figures, runs = {}, {}
-    for name, make in (("threads", lambda: ThreadPool(2)), ("ray", RayPool.start)):
+    for name, make in (("threads", lambda: VectorPool(num_threads=2)), ("ray", RayPool.start)):
         pool = make()
         out = Path(tempfile.mkdtemp(prefix=f"rs-gail-{name}-"))
         began = time.perf_counter()

@@ -27,7 +27,7 @@ import numpy as np
 import tolins  # noqa: F401  (registers the env ids)
 from tolins.policies.experts import SafeExpert
 from tolins.record import RerunRecorder
-from tolins.rollout import run_episode
+from tolins.rollouts.episodes import run_episode
 
 #: Square is the cheapest to simulate, so the worst case for the relative overhead.
 ENVS = ("tolins/Square-v1", "tolins/Hexagon-v1", "tolins/Circle2x2-v1", "tolins/Circle2x8-v1")

@@ -13,7 +13,7 @@ from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import pins_inside
 from tolins.inference.adaptive import InferenceGuidedPolicy
 from tolins.policies import SafeExpert
-from tolins.rollout import run_episode
+from tolins.rollouts.episodes import run_episode
 
 NOMINAL = CircularSocket(rows=2, cols=1)
 #: Pin 0 bent 0.3 mm in x: the nominal goal is blocked (clearance 0.2 mm), a shift is not.

@@ -17,7 +17,7 @@ from tolins.bench.table import ALL_ROW_IDS, PAPER, ROW_IDS, ROWS, TRAININGS, sel
 from tolins.cli import main
 from tolins.inference.study import METHODS
 from tolins.record import check_rrd
-from tolins.rollout import Episode
+from tolins.rollouts.episodes import Episode
 
 SCHEMA = {
     "policy",

@@ -25,12 +25,13 @@ from tolins.bench.executor import RayExecutor
 from tolins.bench.runner import run_bench
 from tolins.cli import main
 from tolins.learning.bc import behaviour_clone
-from tolins.learning.demonstrations import collect, rollout
+from tolins.learning.demonstrations import collect
 from tolins.learning.policy_config import BCConfig, RSGailConfig
-from tolins.learning.pool import EnvCache, ThreadPool
-from tolins.learning.ray_pool import RayPool
 from tolins.learning.rs_gail import Workpiece, train_rs_gail
 from tolins.policies import EXPERTS
+from tolins.rollouts.pool import VectorPool
+from tolins.rollouts.ray_pool import RayPool
+from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
 RAY_ENV = {"RAY_USAGE_STATS_ENABLED": "0", "RAY_AUTH_MODE": "disabled"}
 OBJECT_STORE = 200 * 2**20
@@ -81,14 +82,13 @@ def local_outputs(tmp_path_factory):
     return _outputs(out)
 
 
-def test_an_env_kept_between_episodes_gives_a_fresh_envs_episodes():
+def test_a_vector_env_kept_between_runs_gives_a_fresh_ones_episodes():
     for env_id in ("tolins/Circle2x2-v1", "tolins/Circle2x1Defective-v1"):
-        kept = EnvCache("mujoco")
-        for seed in (3, 4):
-            rollout(kept.get(env_id), EXPERTS["safe"](), seed)
-        again = rollout(kept.get(env_id), EXPERTS["efficient"](), 5)
-        fresh = EnvCache("mujoco")
-        first = rollout(fresh.get(env_id), EXPERTS["efficient"](), 5)
+        kept = VectorEnvCache("mujoco", num_envs=2, num_threads=2)
+        run_jobs(kept, [Job(env_id, EXPERTS["safe"](), seed) for seed in (3, 4, 6)])
+        again = run_jobs(kept, [Job(env_id, EXPERTS["efficient"](), 5)])[0][0]
+        fresh = VectorEnvCache("mujoco", num_envs=1, num_threads=1)
+        first = run_jobs(fresh, [Job(env_id, EXPERTS["efficient"](), 5)])[0][0]
         assert np.array_equal(again.observations, first.observations), env_id
         assert (again.reward, again.collisions) == (first.reward, first.collisions)
         assert kept.env_ids == [env_id]
@@ -101,7 +101,7 @@ def test_rs_gail_on_ray_actors_searches_exactly_as_on_threads(local_ray, tmp_pat
     demos = collect(env, "efficient", 4, seed=0, backend="mujoco")
     policy = behaviour_clone(demos, BCConfig(epochs=5), seed=0).policy
     config = RSGailConfig(iterations=2, popsize=4, episodes=2, eval_episodes=2, sigma0=0.05)
-    pools = {"threads": ThreadPool(2), "ray": RayPool.start()}
+    pools = {"threads": VectorPool(num_threads=2), "ray": RayPool.start()}
     results = {}
     for name, pool in pools.items():
         results[name] = train_rs_gail(

@@ -12,7 +12,7 @@ from rerun.chunk import RrdReader
 import tolins  # noqa: F401  (registers the env ids)
 from tolins.cli import main
 from tolins.learning.policy import Policy, PolicyArchitecture, save_policy
-from tolins.rollout import episode_poses
+from tolins.rollouts.episodes import episode_poses
 
 
 def _poses_and_metadata(path: Path) -> tuple[np.ndarray, dict]:

@@ -35,7 +35,7 @@ from tolins.bench.statistics import (
     unit_samples,
 )
 from tolins.bench.table import ALL_ROWS, PAPER
-from tolins.rollout import Episode
+from tolins.rollouts.episodes import Episode
 
 BY_ID = {row.id: row for row in ALL_ROWS}
 #: The paper's four claims (other claims may compare rows beyond Table 1).

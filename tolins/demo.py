@@ -10,7 +10,7 @@ from tqdm import tqdm
 
 from tolins.envs.tasks import TASKS, Task
 from tolins.policies.experts import EXPERTS
-from tolins.rollout import Summary, run_episode, summarise
+from tolins.rollouts.episodes import Summary, run_episode, summarise
 
 
 @dataclass(frozen=True)

@@ -9,11 +9,14 @@ import gymnasium as gym
 
 from tolins.bench.table import Row
 from tolins.learning.actors import make_actor
-from tolins.rollout import Episode, Policy, run_episode
+from tolins.rollouts.episodes import Episode, Policy, run_episode
+from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
 #: Evaluation seeds start here (no training run uses them); seed index ``s`` of the
 #: training gets ``FIRST_SEED + 1000 s, ...``.
 FIRST_SEED = 10_000
+#: Episodes an evaluation steps side by side (slots of its vector env).
+VECTOR_SLOTS = 16
 
 
 def eval_seeds(seed_index: int, episodes: int) -> list[int]:
@@ -55,6 +58,7 @@ def evaluate(
     record: Path | None = None,
     recorded: int = 0,
     policy_name: str | None = None,
+    vectorized: bool = True,
 ) -> list[Episode]:
     """Run the policy ``entry`` (a name for :func:`tolins.learning.actors.make_actor`, or
     an actor ``observation -> action``) on ``env_id`` from each seed; the first
@@ -64,6 +68,12 @@ def evaluate(
     ``inference=True`` wraps the policy in
     :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary outcomes (the
     paper's π_φ*), reset before every episode.
+
+    With ``vectorized`` (the default) the episodes after the recorded ones run side by
+    side in a vector env (:func:`tolins.rollouts.runner.run_jobs`: the same episodes bit
+    for bit); the policy must then hold no state between calls, as the experts, ``tolins
+    train`` policies and SB3 models do. ``vectorized=False`` runs one episode after
+    another (a policy with memory).
     """
     env = gym.make(env_id, backend=backend)
     actor = make_actor(entry, env.unwrapped.nominal_socket) if isinstance(entry, str) else entry
@@ -78,9 +88,12 @@ def evaluate(
 
         name = policy_name or (entry.split("=")[0] if isinstance(entry, str) else "policy")
         recorder = RerunRecorder(env, record, policy_name=name)
+    # The recorded episodes, and all of π_φ*'s (its inference moves the env's goal between
+    # attempts), run in the single env; the rest side by side in a vector env.
+    sequential = len(seeds) if wrapper is not None or not vectorized else recorded
     episodes = []
     try:
-        for i, seed in enumerate(seeds):
+        for i, seed in enumerate(seeds[:sequential]):
             if wrapper is not None:
                 wrapper.reset(seed)
             target = recorder if recorder is not None and i < recorded else env
@@ -92,6 +105,14 @@ def evaluate(
         if recorder is not None:
             recorder.abort()
         env.close()
+    rest = seeds[sequential:]
+    if rest:
+        envs = VectorEnvCache(backend, num_envs=min(len(rest), VECTOR_SLOTS))
+        try:
+            jobs = [Job(env_id, actor, seed) for seed in rest]
+            episodes += [episode for _, episode in run_jobs(envs, jobs)]
+        finally:
+            envs.close()
     return episodes
 
 

@@ -12,7 +12,7 @@ in where and when each job runs:
 - Ray: every job as a task (1 CPU) as soon as its dependencies are done; torch on one
   thread in ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as
   locally: torch's results can depend on its thread count); RS-GAIL's candidates on one
-  :class:`~tolins.learning.ray_pool.RolloutWorker` actor per CPU of the cluster.
+  :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
 
 Results are identical (tested): every stage's seeds are fixed by its config, not by
 where it runs. Stage folders need a filesystem every node shares (``DIR`` is checked on
@@ -158,9 +158,9 @@ class RayExecutor:
         self._pool = None
 
     def candidate_pool(self):
-        """The :class:`~tolins.learning.ray_pool.RayPool` all trainings share (started once)."""
+        """The :class:`~tolins.rollouts.ray_pool.RayPool` all trainings share (started once)."""
         if self._pool is None:
-            from tolins.learning.ray_pool import RayPool
+            from tolins.rollouts.ray_pool import RayPool
 
             self._pool = RayPool.start()
         return self._pool

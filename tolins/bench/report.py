@@ -17,6 +17,7 @@ from tolins.bench.baselines import env_step_curves
 from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
 from tolins.bench.evaluation import FIRST_SEED
+from tolins.bench.integrity import StageFileError, read_array
 from tolins.bench.results import read_results, results_document
 from tolins.bench.statistics import one_seed_margin
 from tolins.bench.table import PAPER, ROWS, TRAININGS
@@ -58,10 +59,16 @@ def _copy(source: Path, folder: Path, name: str | None = None) -> Path:
 
 
 def _recordings(run: BenchRun, out: Path) -> list[Path]:
+    from tolins.record import RrdError, check_rrd
+
     written = []
     for row_id in run.results:
         source = run.stage_folders[f"eval-{row_id}-seed0"] / RECORDING
         if source.is_file():
+            try:  # a truncated recording is not shipped as the row's
+                check_rrd(source)
+            except RrdError as error:
+                raise StageFileError(f"{error}: delete {source.parent} to rerun it") from error
             written.append(_copy(source, out / "recordings", f"{row_id}.rrd"))
     return written
 
@@ -143,14 +150,14 @@ def _training_trajectories(run: BenchRun, trainer: Trainer) -> Path | None:
     from tolins.learning.policy import load_policy
     from tolins.learning.runs import MEANS
     from tolins.policies import EXPERTS
-    from tolins.rollout import episode_poses
+    from tolins.rollouts.episodes import episode_poses
 
     folder = run.stage_folders.get(trainer.stage_name("pi_n_safe", 0))
     if folder is None or not (folder / MEANS).is_file():
         return None
     training = TRAININGS["pi_n_safe"]
     policy, _ = load_policy(folder / "policy.pt", kind="nominal")
-    means = np.load(folder / MEANS)
+    means = read_array(folder / MEANS)
     last = len(means) - 1
     picks = sorted(set(np.linspace(0, last, 5).round().astype(int).tolist()))
     env = gym.make(training.env_ids[0], backend=run.config.backend)

@@ -14,7 +14,7 @@ import numpy as np
 from tolins.bench.evaluation import FIRST_SEED
 from tolins.bench.statistics import row_intervals
 from tolins.bench.table import Row
-from tolins.rollout import Episode
+from tolins.rollouts.episodes import Episode
 
 FIGURES = ("reward", "success", "steps", "collisions")
 #: The version of ``results.json``'s layout, its ``schema`` field.
@@ -101,10 +101,60 @@ def read_results(path: str | os.PathLike) -> dict[str, Any]:
     ):
         fields = ("source", "tolins_version", "date", "backend", "profile", "first_eval_seed")
         return {"schema": None, **dict.fromkeys(fields), "rows": document}
-    if document.get("schema") != SCHEMA or not isinstance(document.get("rows"), dict):
-        found = document.get("schema")
-        raise ValueError(f"{path}: schema {found!r}; allowed: {SCHEMA!r}")
+    if document.get("schema") != SCHEMA:
+        raise ValueError(f"{path}: schema {document.get('schema')!r}; allowed: {SCHEMA!r}")
+    if not isinstance(document.get("rows"), dict):
+        found = "no" if "rows" not in document else type(document["rows"]).__name__
+        raise ValueError(f"{path}: {found} 'rows'; allowed: an object of row id -> row entry")
+    for row_id, entry in document["rows"].items():
+        problem = entry_problem(entry)
+        if problem:
+            raise ValueError(f"{path}: row {row_id}: {problem}")
     return document
+
+
+def entry_problem(entry: Any) -> str | None:
+    """What is wrong with a ``results.json`` row entry (``None``: nothing found): its
+    means and counts are finite numbers, its per-seed and per-episode figures lists of
+    them (one per seed), and ``reward_mean`` the mean of its per-episode (or per-seed)
+    rewards."""
+    if not isinstance(entry, dict):
+        return f"a {type(entry).__name__}; allowed: an object of figures"
+    for key in ("reward_mean", "success_mean"):
+        if key not in entry:
+            return f"no {key}; allowed: a row entry of tolins bench or evaluate"
+        if not _finite(entry[key]):
+            return f"{key} {entry[key]!r}; allowed: a finite number"
+    for key in ("seeds", "episodes"):
+        value = entry.get(key, 1)
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            return f"{key} {value!r}; allowed: an integer ≥ 1"
+    for figure in FIGURES:
+        values = entry.get(f"{figure}_per_seed")
+        if values is None:
+            continue
+        if not isinstance(values, list) or not all(_finite(v) for v in values):
+            return f"{figure}_per_seed {values!r}; allowed: a list of finite numbers"
+        if "seeds" in entry and len(values) != entry["seeds"]:
+            return f"{figure}_per_seed has {len(values)} values; allowed: one per seed"
+    episodes = entry.get("reward_per_episode")
+    if episodes is not None and not (
+        isinstance(episodes, list)
+        and all(isinstance(seed, list) and all(_finite(r) for r in seed) for seed in episodes)
+    ):
+        return "reward_per_episode is not a list of lists of finite numbers (one per seed)"
+    flat = [r for seed in episodes or [] for r in seed] or entry.get("reward_per_seed") or []
+    if flat and not np.isclose(float(np.mean(flat)), entry["reward_mean"], rtol=1e-9, atol=1e-9):
+        source = "reward_per_episode" if episodes else "reward_per_seed"
+        return (
+            f"reward_mean {entry['reward_mean']!r} is not the mean of its {source} "
+            f"({float(np.mean(flat))!r}); allowed: the file as tolins wrote it"
+        )
+    return None
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
 
 
 def standard_error(entry: dict[str, Any], figure: str = "reward") -> float:

@@ -11,7 +11,6 @@ stage ran (:mod:`.timeline`).
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
 from dataclasses import asdict
@@ -23,13 +22,10 @@ from tqdm import tqdm
 from tolins.atomic import atomic_json
 from tolins.bench.claims import check_claims
 from tolins.bench.config import EPISODES, RECORDING, BenchConfig, BenchRun
-from tolins.bench.evaluation import (
-    episodes_from_json,
-    episodes_to_json,
-    eval_seeds,
-    evaluate_row,
-)
+from tolins.bench.evaluation import episodes_to_json, eval_seeds, evaluate_row
 from tolins.bench.executor import Job, make_executor
+from tolins.bench.integrity import checked_episodes, read_json
+from tolins.bench.lock import locked_folder
 from tolins.bench.profiles import PROFILES, Profile
 from tolins.bench.report import write_reports
 from tolins.bench.results import row_entry
@@ -37,7 +33,7 @@ from tolins.bench.stages import StageCache
 from tolins.bench.table import TRAININGS, Row, select_rows
 from tolins.bench.timeline import write_timeline
 from tolins.bench.training import Trainer, train_stage
-from tolins.rollout import Episode
+from tolins.rollouts.episodes import Episode
 
 STUDY = "inference.json"
 
@@ -45,7 +41,13 @@ STUDY = "inference.json"
 def run_bench(
     config: BenchConfig, *, progress: bool = True, log: Callable[[str], None] = tqdm.write
 ) -> BenchRun:
-    """Run (or resume) the benchmark and write every report into ``config.out``."""
+    """Run (or resume) the benchmark and write every report into ``config.out``, holding
+    its lock (:mod:`.lock`: ``ValueError`` naming the process when another bench has it)."""
+    with locked_folder(config.out):
+        return _run_bench(config, progress=progress, log=log)
+
+
+def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None]) -> BenchRun:
     began = time.perf_counter()
     profile = PROFILES[config.profile]
     seeds = config.seeds or profile.seeds
@@ -60,7 +62,7 @@ def run_bench(
     cache.root.mkdir(parents=True, exist_ok=True)
     try:
         local = executor.name == "local"
-        plan = _Plan(cache)
+        plan = _Plan(cache, log)
         pool = executor.candidate_pool()
         _plan_trainings(plan, trainer, rows, seeds, pool, progress and local, log)
         _plan_evaluations(plan, trainer, rows, seeds)
@@ -93,12 +95,15 @@ def run_bench(
         run.stage_wall_s[name] = cache.wall_s(folder)
     run.cached += [name for name in plan.done if name in plan.cached]
     for row in rows:
-        per_seed = [_episodes(run.stage_folders[f"eval-{row.id}-seed{s}"]) for s in range(seeds)]
+        per_seed = [
+            _episodes(run.stage_folders[f"eval-{row.id}-seed{s}"], profile.eval_episodes)
+            for s in range(seeds)
+        ]
         run.results[row.id] = row_entry(row, per_seed)
     budgets = (profile.deep_rl_env_steps, profile.rs_gail_env_steps)
     run.claims = check_claims(run.results, budgets=budgets)
     if config.study:
-        run.study = json.loads((run.stage_folders["inference-study"] / STUDY).read_text())
+        run.study = read_json(run.stage_folders["inference-study"] / STUDY)
     run.wall_s = time.perf_counter() - began
     write_reports(run, trainer, seeds)
     write_timeline(out, run)
@@ -108,8 +113,8 @@ def run_bench(
 class _Plan:
     """The stages of a run: finished ones (``done``: name -> result) and jobs to run."""
 
-    def __init__(self, cache: StageCache) -> None:
-        self.cache = cache
+    def __init__(self, cache: StageCache, log: Callable[[str], None]) -> None:
+        self.cache, self.log = cache, log
         self.done: dict[str, Path] = {}
         self.cached: set[str] = set()
         self.jobs: list[Job] = []
@@ -135,6 +140,9 @@ class _Plan:
         upstream's result)`` (``upstream``: an earlier stage name, or ``None`` passed as
         such; nothing with ``takes_upstream=False``)."""
         self._names.add(name)
+        bad = self.cache.discard_bad(name, config)
+        if bad is not None:
+            self.log(bad)
         if self.cache.finished(name, config):
             folder = self.cache.folder(name, config)
             self.done[name] = folder if result is None else folder / result
@@ -251,8 +259,9 @@ def evaluation_stage(
     return StageCache(root).run(f"eval-{row.id}-seed{seed}", config, build)[0]
 
 
-def _episodes(folder: Path) -> list[Episode]:
-    return episodes_from_json(json.loads((folder / EPISODES).read_text()))
+def _episodes(folder: Path, count: int) -> list[Episode]:
+    """The ``count`` episodes of the evaluation stage in ``folder``, checked."""
+    return checked_episodes(folder / EPISODES, read_json(folder / EPISODES), count)
 
 
 def _study(profile: Profile, backend: str, workers: int = 2):

@@ -57,7 +57,17 @@ def evaluate_policy(
         entry = as_actor(policy, name=name or text)
     label = name or text
     row = Row(label, text, "user", env_id, "-")
-    episodes_run = evaluate(entry, env_id, backend, eval_seeds(0, episodes), policy_name=label)
+    # A user's own code (an object, MODULE:NAME) may keep state between calls: its episodes
+    # run one after another; experts, policy files and SB3 models side by side.
+    stateless = isinstance(policy, str) and (":" not in policy or Path(policy).exists())
+    episodes_run = evaluate(
+        entry,
+        env_id,
+        backend,
+        eval_seeds(0, episodes),
+        policy_name=label,
+        vectorized=stateless,
+    )
     return row_entry(row, [episodes_run])
 
 

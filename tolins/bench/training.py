@@ -11,7 +11,7 @@ from tolins.bench.stages import StageCache, stage_key
 from tolins.bench.table import SB3_METHODS, TRAININGS, Training
 
 if TYPE_CHECKING:
-    from tolins.learning.pool import CandidatePool
+    from tolins.rollouts.pool import CandidatePool
 
 
 def train_stage(

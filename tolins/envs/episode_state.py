@@ -118,6 +118,11 @@ class EpisodeState:
         self.score.check_running()
 
     @property
+    def running(self) -> bool:
+        """Whether an episode has been started and has not ended (a broken one counts)."""
+        return self.state is not None and not self.score.over
+
+    @property
     def over(self) -> bool:
         """Whether the episode has ended (success, horizon or fault)."""
         return self.score.over

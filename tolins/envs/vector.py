@@ -29,7 +29,7 @@ from tolins.paper import A_MAX
 
 #: Batched simulators by name (``warp`` needs ``pip install 'tolins[warp]'``).
 BATCH_BACKENDS = ("mujoco", "kinematic", "warp")
-_AUTORESET = {mode.value: mode for mode in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)}
+_AUTORESET = {mode.value: mode for mode in AutoresetMode}
 
 
 def make_batch_physics(
@@ -81,7 +81,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         autoreset_mode: ``"NextStep"`` (gymnasium's default: an env that ended is reset by
             the next ``step``, which returns its first observation, reward 0 and the reset's
             info) or ``"SameStep"`` (reset within the step that ends it; that step's last
-            observation and info are in ``info["final_obs"]`` / ``info["final_info"]``).
+            observation and info are in ``info["final_obs"]`` / ``info["final_info"]``) or
+            ``"Disabled"`` (no autoreset: an env whose episode has ended, or that was never
+            reset, is not stepped — its row repeats its last observation with reward 0 and
+            no ``info`` — until ``reset(options={"reset_mask": mask})`` resets it).
         goal: The goal of every env, as ``InsertionEnv``'s.
         **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
             ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
@@ -89,7 +92,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
 
     ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
     masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
-    each with its own; options (``pose``, ``goal``) apply to every env for that reset. A
+    each with its own; options (``pose``, ``goal``) apply to every env reset by that call,
+    ``options["reset_mask"]`` (a bool per env, gymnasium's) resets only those envs. A
     reset or step that raises changes nothing; after a failed reset every step raises
     ``gymnasium.error.ResetNeeded`` until a reset succeeds.
     """
@@ -147,22 +151,31 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         options: dict[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
         seeds = _per_env_seeds(seed, self.num_envs)
-        if seed is not None:
-            self._np_random, self._np_random_seed = seeding.np_random(
-                seeds[0] if isinstance(seeds[0], int) else None
-            )
-        for i, s in enumerate(seeds):
-            if s is not None or self._rngs[i] is None:
-                self._rngs[i] = seeding.np_random(s)[0]
-        ids = np.arange(self.num_envs)
+        options = dict(options or {})
+        mask = np.ones(self.num_envs, dtype=bool)
+        if "reset_mask" in options:
+            mask = np.asarray(options.pop("reset_mask"))
+            if mask.shape != (self.num_envs,) or mask.dtype != bool or not mask.any():
+                raise ValueError(
+                    f"options['reset_mask']={mask!r}; allowed: {self.num_envs} bools, at "
+                    "least one True"
+                )
+        if seed is not None and isinstance(seeds[0], int):
+            self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
+        ids = np.flatnonzero(mask)
+        for i in ids:
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
         try:
             plans = [self.episodes[i].plan(self._rngs[i], options) for i in ids]
         except Exception:
-            for episode in self.episodes:
-                episode.broken = True
+            for i in ids:
+                self.episodes[i].broken = True
             raise
         observations, infos = self._begin(ids, plans)
-        self._autoreset[:] = False
+        if not mask.all():
+            observations[~mask] = [self.episodes[i].observation for i in np.flatnonzero(~mask)]
+        self._autoreset[ids] = False
         return observations, infos
 
     def step(
@@ -174,13 +187,17 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
                 f"actions have shape {shape}; allowed: ({self.num_envs}, 4), one "
                 "[ux, uy, utheta, uz] per env"
             )
-        same_step = self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
-        running = np.flatnonzero(~self._autoreset)
+        mode = self.metadata["autoreset_mode"]
+        same_step = mode == AutoresetMode.SAME_STEP
+        if mode == AutoresetMode.DISABLED:
+            running = np.array([i for i, e in enumerate(self.episodes) if e.running], np.intp)
+        else:
+            running = np.flatnonzero(~self._autoreset)
         for i in running:
             self.episodes[i].check_running()
         velocities = np.array([check_action(actions[i]) for i in running]).reshape(-1, 4)
 
-        observations = np.zeros((self.num_envs, 8))
+        observations = np.array([episode.observation for episode in self.episodes])
         rewards = np.zeros(self.num_envs)
         terminations = np.zeros(self.num_envs, dtype=bool)
         truncations = np.zeros(self.num_envs, dtype=bool)
@@ -198,6 +215,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
                 infos = self._add_info(infos, info, i)
         ended = terminations | truncations
         resetting = ended if same_step else self._autoreset
+        if mode == AutoresetMode.DISABLED:
+            resetting = np.zeros(self.num_envs, bool)
         if resetting.any():
             ids = np.flatnonzero(resetting)
             plans = [self.episodes[i].plan(self._rngs[i], None) for i in ids]

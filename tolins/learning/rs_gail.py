@@ -24,8 +24,8 @@ per weight, which is what so few samples support (docs/learning.md).
 
 Reproducibility: every candidate's episode is seeded from (seed, iteration, candidate,
 episode) and a reset makes it independent of the env's earlier episodes, so the result
-does not depend on ``workers`` nor on the pool (threads or Ray actors,
-:mod:`tolins.learning.pool`). pycma
+does not depend on ``workers`` nor on the pool (vector envs or Ray actors,
+:mod:`tolins.rollouts.pool`). pycma
 samples from a private ``RandomState`` (its ``randn`` option; numpy's global RNG is left
 alone). The checkpoint, written after every iteration beside D and its optimiser, holds
 no pickle (a checkpoint is data: docs/security.md): the start ``x0`` and every fitness
@@ -54,25 +54,18 @@ from tolins.learning.demonstrations import Rollout, pairs
 from tolins.learning.discriminator import Discriminator
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import RSGailConfig
-from tolins.learning.pool import (
+from tolins.rollouts.pool import (
     CandidatePool,
-    EnvCache,
-    ThreadPool,
+    VectorPool,
+    Workpiece,
     policy_rollouts,
     spread_rollouts,
 )
+from tolins.rollouts.runner import VectorEnvCache
 
 CHECKPOINT = "checkpoint.pt"
 FORMAT = "tolins.rs_gail_run/2"
 _EVAL = 0xE7A1
-
-
-@dataclass(frozen=True)
-class Workpiece:
-    """A training environment and its tolerance embedding ψ (``None`` for π_n)."""
-
-    env_id: str
-    embedding: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -97,13 +90,13 @@ def episode_seed(*key: int) -> int:
 
 
 class _Rollouts:
-    """Runs a policy's episodes over the workpieces in fresh envs."""
+    """Runs a policy's episodes over the workpieces in fresh vector envs."""
 
     def __init__(self, workpieces: list[Workpiece], backend: str) -> None:
         self.workpieces, self.backend = workpieces, backend
 
     def run(self, policy: Policy, seeds: list[int]) -> list[Rollout]:
-        envs = EnvCache(self.backend)
+        envs = VectorEnvCache(self.backend)
         try:
             return policy_rollouts(envs, policy, self.workpieces, seeds)
         finally:
@@ -112,11 +105,12 @@ class _Rollouts:
 
 @contextlib.contextmanager
 def _candidate_pool(pool: CandidatePool | None, workers: int) -> Iterator[CandidatePool]:
-    """``pool``, or a :class:`ThreadPool` of ``workers`` threads closed after the block."""
+    """``pool``, or a :class:`~tolins.rollouts.pool.VectorPool` stepping on ``workers``
+    threads, closed after the block."""
     if pool is not None:
         yield pool
         return
-    own = ThreadPool(workers)
+    own = VectorPool(num_threads=workers)
     try:
         yield own
     finally:
@@ -173,7 +167,7 @@ def train_rs_gail(
 ) -> RSGailResult:
     """Run RS-GAIL from ``policy`` (its trainable part is searched), writing
     ``out/checkpoint.pt`` and ``out/curves.csv`` after every iteration. The candidates'
-    episodes run on ``pool`` (default: a :class:`~tolins.learning.pool.ThreadPool` of
+    episodes run on ``pool`` (default: a :class:`~tolins.rollouts.pool.VectorPool` on
     ``config.workers`` threads); the result does not depend on it."""
     out = Path(out)
     path = out / CHECKPOINT

@@ -20,9 +20,9 @@ from tolins.learning.curves import plot_curves, write_curves_csv
 from tolins.learning.demonstrations import Rollout, collect
 from tolins.learning.policy import load_policy, save_policy
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
-from tolins.learning.pool import CandidatePool
 from tolins.learning.rs_gail import RSGailResult, Workpiece, check_resumable, train_rs_gail
 from tolins.learning.tolerance_guided import train_tolerance_guided, workpieces
+from tolins.rollouts.pool import CandidatePool
 
 #: The CMA-ES mean of every iteration, then the final policy's parameters (``.npy``).
 MEANS = "means.npy"

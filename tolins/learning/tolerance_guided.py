@@ -13,8 +13,8 @@ import numpy as np
 from tolins.learning.demonstrations import Rollout
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import ResidualConfig, RSGailConfig
-from tolins.learning.pool import CandidatePool
 from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
+from tolins.rollouts.pool import CandidatePool
 
 
 def workpieces(env_ids: list[str], embeddings: list[np.ndarray] | None = None) -> list[Workpiece]:

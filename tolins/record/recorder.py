@@ -19,7 +19,7 @@ from tolins.record.episode import EpisodeBuffer, send_episode
 from tolins.record.layout import default_blueprint
 from tolins.record.metadata import spec_to_dict
 from tolins.record.scene import log_board
-from tolins.rollout import Episode, Policy, run_episode
+from tolins.rollouts.episodes import Episode, Policy, run_episode
 
 APPLICATION_ID = "tolins"
 

@@ -1,4 +1,10 @@
-"""Roll policies out in environments and summarise the episodes."""
+"""Run a policy's episodes in one env and summarise them: the single-env loop.
+
+:func:`run_episode` keeps what Table 1 counts (:class:`Episode`), :func:`rollout` also the
+episode's (observation, action) pairs (:class:`Rollout`, for imitation). Many episodes at
+once go through the vector env (:mod:`tolins.rollouts.runner`), which gives the same
+records bit for bit.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +13,9 @@ from dataclasses import dataclass
 
 import gymnasium as gym
 import numpy as np
+
+import tolins.envs  # noqa: F401  (registers the env ids)
+from tolins.envs.episode import check_action
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -82,3 +91,48 @@ def episode_poses(env: gym.Env, policy: Policy, seed: int | None = None) -> np.n
         poses.append(info["pose"])
         done = terminated or truncated
     return np.array(poses)
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """One episode: ``observations`` ``(T, 8)``, ``actions`` ``(T, 4)`` (clipped as the env
+    applies them), return, success, collisions."""
+
+    observations: np.ndarray
+    actions: np.ndarray
+    reward: float
+    success: bool
+    collisions: int
+
+
+def rollout(env: gym.Env, policy: Policy, seed: int) -> Rollout:
+    """One episode of ``policy`` in ``env`` from ``reset(seed=seed)``, keeping its pairs."""
+    observation, info = env.reset(seed=seed)
+    observations, actions, total, done = [], [], 0.0, False
+    while not done:
+        action = check_action(policy(observation))
+        observations.append(observation)
+        actions.append(action)
+        observation, reward, terminated, truncated, info = env.step(action)
+        total += reward
+        done = terminated or truncated
+    return Rollout(
+        np.array(observations),
+        np.array(actions),
+        total,
+        bool(info["success"]),
+        int(info["n_collisions"]),
+    )
+
+
+def check_env_id(env_id: str) -> str:
+    """``env_id`` if it is a registered tolins id; else ``ValueError`` listing them."""
+    if env_id not in gym.registry or not str(env_id).startswith("tolins/"):
+        ids = sorted(i for i in gym.registry if i.startswith("tolins/"))
+        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(ids)}")
+    return env_id
+
+
+def make_env(env_id: str, backend: str) -> gym.Env:
+    """The unwrapped env ``env_id`` on ``backend`` (no wrappers: rollouts end on their own)."""
+    return gym.make(check_env_id(env_id), backend=backend).unwrapped

@@ -18,18 +18,21 @@ from typing import Any
 
 import numpy as np
 
-from tolins.learning.demonstrations import Rollout
-from tolins.learning.pool import EnvCache, candidate_rollouts
+from tolins.rollouts.episodes import Rollout
+from tolins.rollouts.pool import candidate_jobs, run_grouped
+from tolins.rollouts.runner import VectorEnvCache
 
 
 class RolloutWorker:
-    """The state of one actor: envs by backend, kept between calls."""
+    """The state of one actor: a vector env per backend and env id (one thread: an actor
+    per CPU), kept between calls."""
 
-    def __init__(self) -> None:
+    def __init__(self, num_envs: int = 4) -> None:
         import torch
 
-        torch.set_num_threads(1)  # as the thread pool runs its candidates
-        self._envs: dict[str, EnvCache] = {}
+        torch.set_num_threads(1)  # the policies run one at a time beside the batch
+        self.num_envs = num_envs
+        self._envs: dict[str, VectorEnvCache] = {}
 
     def candidate(
         self,
@@ -40,11 +43,14 @@ class RolloutWorker:
         seeds: Sequence[int],
         first: int = 0,
     ) -> list[Rollout]:
-        """:func:`tolins.learning.pool.candidate_rollouts` in this actor's envs."""
-        envs = self._envs.setdefault(backend, EnvCache(backend))
+        """The episodes of one candidate (:func:`~tolins.rollouts.pool.candidate_jobs`) in
+        this actor's vector envs."""
+        if backend not in self._envs:
+            self._envs[backend] = VectorEnvCache(backend, self.num_envs, num_threads=1)
         # writable copies: Ray hands arrays out read-only (and torch warns about those)
         pieces = [_writable(piece) for piece in workpieces]
-        return candidate_rollouts(envs, policy, pieces, np.array(flat), seeds, first)
+        groups = candidate_jobs(policy, pieces, [np.array(flat)], [seeds], [first])
+        return run_grouped(self._envs[backend], groups)[0]
 
     def env_ids(self) -> list[tuple[str, str]]:
         """``(backend, env id)`` of every env this actor keeps."""
@@ -65,7 +71,7 @@ def _writable(piece: Any) -> Any:
 
 
 class RayPool:
-    """A :class:`~tolins.learning.pool.CandidatePool` over Ray actor handles (picklable: pass
+    """A :class:`~tolins.rollouts.pool.CandidatePool` over Ray actor handles (picklable: pass
     it to the Ray tasks that train)."""
 
     def __init__(self, workers: Sequence[Any]) -> None:

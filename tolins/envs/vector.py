@@ -172,9 +172,12 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             for i in ids:
                 self.episodes[i].broken = True
             raise
-        observations, infos = self._begin(ids, plans)
+        observations, reset_infos = self._begin(ids, plans)
         if not mask.all():
             observations[~mask] = [self.episodes[i].observation for i in np.flatnonzero(~mask)]
+        infos: dict[str, Any] = {}
+        for i, info in zip(ids.tolist(), reset_infos, strict=True):
+            infos = self._add_info(infos, info, i)
         self._autoreset[ids] = False
         return observations, infos
 
@@ -201,7 +204,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         rewards = np.zeros(self.num_envs)
         terminations = np.zeros(self.num_envs, dtype=bool)
         truncations = np.zeros(self.num_envs, dtype=bool)
-        infos: dict[str, Any] = {}
+        env_infos: list[dict[str, Any] | None] = [None] * self.num_envs
         if running.size:
             state = self.physics.step(running, velocities)
             for k, i in enumerate(running.tolist()):
@@ -210,9 +213,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
                 )
                 observations[i], rewards[i] = obs, reward
                 terminations[i], truncations[i] = terminated, truncated
-                if same_step and (terminated or truncated):
-                    info = {"final_obs": obs, "final_info": info}
-                infos = self._add_info(infos, info, i)
+                env_infos[i] = info
         ended = terminations | truncations
         resetting = ended if same_step else self._autoreset
         if mode == AutoresetMode.DISABLED:
@@ -221,32 +222,29 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             ids = np.flatnonzero(resetting)
             plans = [self.episodes[i].plan(self._rngs[i], None) for i in ids]
             reset_observations, reset_infos = self._begin(ids, plans)
+            for i, info in zip(ids.tolist(), reset_infos, strict=True):
+                if same_step:  # gymnasium's: the step's last observation and info aside
+                    info = {"final_obs": observations[i].copy(), "final_info": env_infos[i], **info}
+                env_infos[i] = info
             observations[ids] = reset_observations[ids]
-            for i in ids.tolist():
-                infos = self._add_info(infos, self._env_info(reset_infos, i), i)
+        infos: dict[str, Any] = {}
+        for i, info in enumerate(env_infos):
+            if info is not None:
+                infos = self._add_info(infos, info, i)
         self._autoreset = np.zeros(self.num_envs, bool) if same_step else ended
         return observations, rewards, terminations, truncations, infos
 
-    def _begin(self, ids: np.ndarray, plans: list) -> tuple[np.ndarray, dict[str, Any]]:
+    def _begin(self, ids: np.ndarray, plans: list) -> tuple[np.ndarray, list[dict[str, Any]]]:
         """Start the planned episodes of envs ``ids``: observations ``(num_envs, 8)`` (rows
-        ``ids`` set) and their infos."""
+        ``ids`` set) and each one's info."""
         for i, plan in zip(ids, plans, strict=True):
             self.physics.set_socket(int(i), plan.socket)
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
-        observations, infos = np.zeros((self.num_envs, 8)), {}
+        observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
             observations[i], info = self.episodes[i].begin(plan, state.row(k), self._rngs[i])
-            infos = self._add_info(infos, info, int(i))
+            infos.append(info)
         return observations, infos
-
-    @staticmethod
-    def _env_info(infos: dict[str, Any], i: int) -> dict[str, Any]:
-        """Env ``i``'s entries of the batched ``infos`` (those whose ``_key`` mask is set)."""
-        return {
-            key: value[i]
-            for key, value in infos.items()
-            if not key.startswith("_") and infos[f"_{key}"][i]
-        }
 
     def close_extras(self, **kwargs: Any) -> None:
         self.physics.close()

@@ -14,8 +14,9 @@ What it measures, all in one run:
 
    * ``env``: ``InsertionEnv(socket, measurement_noise=0).step(action)``;
    * ``bare``: the same model (``env.backend.model``) with a fresh ``mujoco.MjData``, the
-     same start pose and the same controls, one ``mj_step(model, data, nstep=250)`` per
-     control step after re-anchoring the servos (``data.act[:] = data.qpos``), exactly
+     same start pose and the same controls; per control step the servos are re-anchored
+     (``data.act[:] = data.qpos``) and five chunks of 50 physics steps run, each as 49
+     ``mj_step`` with the sensors off and one with them on (:func:`bare_steps`), exactly
      what the backend does, minus everything else;
    * ``env cc=1``: the env with its backend replaced by
      ``MujocoBackend(socket, 0.25, contact_checks=1)`` (one contact-force read and one
@@ -30,7 +31,16 @@ What it measures, all in one run:
    then hits all three alike and drops out. The ``match`` column checks that the bare
    loop ends at the same pose as the env, bit for bit.
 
-2. **Threads.** ``--envs`` environments (2*2 socket) stepped ``--thread-steps`` control
+2. **Old vs new control step** (issue 19). For each socket and the five regimes of
+   ``contact_profile.py`` (free, approaching, blocked, sliding, inserted), blocks of
+   ``--steps`` control steps of the env's :class:`ServoStepper` alternate between
+   ``old`` (sensors in every physics step, as before issue 19), ``new`` (today's default:
+   sensors only in the physics step before each read) and ``pairs`` (new, on
+   ``make_mjcf(socket, contact_pairs=True)``); the fastest block of each is kept.
+   ``new x`` and ``pairs x`` = old time / their time; ``same``: all three end at the same
+   state bit for bit (qpos, qvel, sensordata).
+
+3. **Threads.** ``--envs`` environments (2*2 socket) stepped ``--thread-steps`` control
    steps each, round-robin, by one thread, then the same envs split into ``--threads``
    disjoint groups stepped concurrently (``ThreadPoolExecutor``; ``mj_step`` releases
    the GIL). Resets are included in both timings here. Best of ``--repeats``.
@@ -50,13 +60,18 @@ import platform
 import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from tolins import CircularSocket, PolygonSocket
+from tolins import CircularSocket, PolygonSocket, make_mjcf
 from tolins.envs import InsertionEnv
-from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.envs.mujoco_backend import MujocoBackend, ServoStepper
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from contact_profile import REGIMES, SOCKETS
+from contact_profile import regime as profile_regime
 
 #: Action ``[ux, uy, utheta, uz]`` -> ctrl/qpos order (joints ``x, y, z, theta``).
 ACTION_TO_JOINT = np.array([0, 1, 3, 2])
@@ -145,6 +160,21 @@ def run_env(env: InsertionEnv, case: Case, steps: int) -> tuple[float, dict]:
     }
 
 
+_SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+
+
+def bare_steps(model: mujoco.MjModel, data: mujoco.MjData, nstep: int, checks: int = 5) -> None:
+    """One control step's physics as the backend runs it: ``checks`` chunks, each all but
+    its last physics step with the sensors off (only the last one's are read)."""
+    flags = model.opt.disableflags
+    chunk = nstep // checks
+    for _ in range(checks):
+        model.opt.disableflags = flags | _SENSORS_OFF
+        mujoco.mj_step(model, data, nstep=chunk - 1)
+        model.opt.disableflags = flags
+        mujoco.mj_step(model, data)
+
+
 def bare_reset(model: mujoco.MjModel, data: mujoco.MjData, pose: np.ndarray) -> None:
     mujoco.mj_resetData(model, data)
     data.qpos[:] = pose[ACTION_TO_JOINT]
@@ -159,7 +189,6 @@ def run_bare(
     ctrl = case.action[ACTION_TO_JOINT]
     pose = case.pose
     act, qpos, data_ctrl = data.act, data.qpos, data.ctrl
-    mj_step = mujoco.mj_step
     clock = time.perf_counter
     elapsed = 0.0
     done = steps
@@ -170,7 +199,7 @@ def run_bare(
         for _ in range(n):
             act[:] = qpos
             data_ctrl[:] = ctrl
-            mj_step(model, data, nstep=nstep)
+            bare_steps(model, data, nstep)
         elapsed += clock() - t0
         done -= n
         if done > 0:
@@ -299,6 +328,88 @@ def check_regimes(results: list[Result]) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------
+# Part 2: old vs new model.
+# ---------------------------------------------------------------------------------------
+
+
+#: Part 2's variants: (contact_pairs, lazy_sensors).
+VARIANTS = {"old": (False, False), "new": (False, True), "pairs": (True, True)}
+
+
+def model_stepper(socket, contact_pairs: bool, lazy_sensors: bool) -> ServoStepper:
+    """The env's control step on ``make_mjcf(socket, contact_pairs=...)``."""
+    model = mujoco.MjModel.from_xml_string(make_mjcf(socket, contact_pairs=contact_pairs))
+    stepper = ServoStepper(model, mujoco.MjData(model))
+    stepper.lazy_sensors = lazy_sensors
+    return stepper
+
+
+def run_stepper(stepper: ServoStepper, pose, action, steps: int) -> float:
+    """Seconds of ``steps`` control steps from a reset at ``pose`` (reset untimed)."""
+    stepper.reset(np.array(pose, dtype=float))
+    action = np.array(action, dtype=float)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        stepper.step(action, 250)
+    return time.perf_counter() - t0
+
+
+def measure_models(
+    socket_name: str, regime_name: str, steps: int, repeats: int, min_time: float
+) -> tuple[dict[str, float], bool]:
+    """Seconds per control step of each variant (blocks rotating, fastest kept), and
+    whether all end at the same state."""
+    case = profile_regime(socket_name, regime_name)
+    socket = SOCKETS[socket_name]
+    steppers = {name: model_stepper(socket, *v) for name, v in VARIANTS.items()}
+    first = run_stepper(steppers["old"], case.pose, case.action, steps)
+    for name in list(VARIANTS)[1:]:
+        run_stepper(steppers[name], case.pose, case.action, steps)
+    blocks = max(repeats, math.ceil(min_time / first)) if first > 0 else repeats
+    names = list(VARIANTS)
+    best = dict.fromkeys(names, math.inf)
+    for i in range(blocks):
+        for k in range(len(names)):
+            name = names[(i + k) % len(names)]
+            t = run_stepper(steppers[name], case.pose, case.action, steps)
+            best[name] = min(best[name], t)
+    old = steppers["old"].data
+    same = all(
+        np.array_equal(getattr(old, f), getattr(s.data, f))
+        for s in steppers.values()
+        for f in ("qpos", "qvel", "sensordata")
+    )
+    return {name: t / steps for name, t in best.items()}, same
+
+
+def print_models(steps: int, repeats: int, min_time: float) -> list[str]:
+    """Part 2's table; the problems found."""
+    header = (
+        f"{'socket':<8} {'regime':<12} {'old st/s':>9} {'new st/s':>9} {'new x':>6} "
+        f"{'pairs st/s':>10} {'pairs x':>7} {'same':>5}"
+    )
+    print(header)
+    print("-" * len(header))
+    problems = []
+    for socket_name in SOCKETS:
+        for regime_name in REGIMES:
+            t, same = measure_models(socket_name, regime_name, steps, repeats, min_time)
+            print(
+                f"{socket_name:<8} {regime_name:<12} {1 / t['old']:>9.1f} {1 / t['new']:>9.1f} "
+                f"{t['old'] / t['new']:>6.2f} {1 / t['pairs']:>10.1f} "
+                f"{t['old'] / t['pairs']:>7.2f} {'yes' if same else 'NO':>5}"
+            )
+            if not same:
+                problems.append(f"{socket_name} {regime_name}: the variants' states differ")
+    print(
+        "old: sensors in every physics step (before issue 19); new: sensors only before each "
+        "read (the default);\npairs: new on make_mjcf(socket, contact_pairs=True); x: old "
+        "time / variant time, blocks rotating"
+    )
+    return problems
+
+
+# ---------------------------------------------------------------------------------------
 # Part 3: threads.
 # ---------------------------------------------------------------------------------------
 
@@ -331,7 +442,7 @@ def step_bare(
         for model, data in sims:
             data.act[:] = data.qpos
             data.ctrl[:] = ctrl
-            mujoco.mj_step(model, data, nstep=nstep)
+            bare_steps(model, data, nstep)
             if k % horizon == 0:
                 bare_reset(model, data, case.pose)
 
@@ -420,6 +531,8 @@ def main(argv: list[str] | None = None) -> int:
     results = [measure_case(c, args.steps, args.repeats, args.min_time) for c in cases()]
     print_results(results)
     problems = check_regimes(results)
+    print(f"\nOld vs new model: blocks of {args.steps} control steps, alternating")
+    problems += print_models(args.steps, args.repeats, args.min_time)
     for p in problems:
         print(f"WARNING: {p}")
 

@@ -18,6 +18,9 @@ Elements (every one named):
   force/torque site ``ft_site`` read by the sensors ``force`` and ``torque``, and per
   pin a box site ``pin{i}_zone`` read by the touch sensor ``pin{i}_touch`` (the summed
   normal force of that pin's contacts).
+* ``<contact>`` (only with ``contact_pairs=True``): a ``<pair>`` of each pin with every
+  board piece it can reach (:mod:`tolins.mjcf.contacts`); the pins then take no part in
+  automatic collision.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from tolins.geometry.specs import (
 )
 from tolins.geometry.workspace import PIN_LENGTH, POSE_HIGH, POSE_LOW, reach
 from tolins.mjcf.board import BOARD_MARGIN, board_boxes, hole_wall_pieces
+from tolins.mjcf.contacts import pair_order, pin_reach_boxes, reachable
 from tolins.mjcf.xml import num, nums
 from tolins.paper import A_MAX
 
@@ -138,6 +142,37 @@ def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
     return assets, body
 
 
+def _board_pieces(spec: SocketSpec) -> list[tuple[str, str, np.ndarray]]:
+    """``(name, geom type, [[x_lo, y_lo], [x_hi, y_hi]])`` of every board geom, in model order."""
+    sides, circumradius = hole_shape(spec)
+    outlines = hole_wall_pieces(sides, circumradius, cell_half_width(spec))
+    pieces = [
+        (f"hole{h}_wall{k}", "mesh", np.array([p.min(axis=0), p.max(axis=0)]) + center)
+        for h, center in enumerate(spec.hole_centers)
+        for k, p in enumerate(outlines)
+    ]
+    for i, (center, half) in enumerate(board_filler_boxes(spec)):
+        pieces.append((f"board_box{i}", "box", np.array([center - half, center + half])))
+    return pieces
+
+
+def _pin_type(spec: SocketSpec) -> str:
+    if isinstance(spec, CircularSocket):
+        return "cylinder"
+    return "box" if spec.sides == 4 else "mesh"
+
+
+def _contact_pairs(spec: SocketSpec) -> list[str]:
+    """The ``<pair>``s of every pin with every board piece it can reach
+    (:mod:`tolins.mjcf.contacts`); the same for every spec of one family layout."""
+    pieces = _board_pieces(spec)
+    pins = [(f"pin{i}", _pin_type(spec)) for i in range(spec.n_pins)]
+    mask = reachable(pin_reach_boxes(spec), np.array([box for _, _, box in pieces]))
+    # Geom ids: the board's pieces, the carrier, then the pins.
+    order = pair_order(pins, [(name, kind) for name, kind, _ in pieces], mask, len(pieces) + 1)
+    return [f'<pair geom1="{board}" geom2="{pin}"/>' for board, pin in order]
+
+
 def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
     """Mesh assets and geoms of the pins, tips at z = 0 of the workpiece frame."""
     half = PIN_LENGTH / 2
@@ -209,13 +244,32 @@ def _servo(name: str, joint: str, kp: float, inertia: float, limit: float, speed
     )
 
 
-def make_mjcf(spec: SocketSpec) -> str:
-    """The MJCF model of ``spec``'s board and workpiece. Same spec, same bytes."""
+def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False) -> str:
+    """The MJCF model of ``spec``'s board and workpiece. Same spec, same bytes.
+
+    ``contact_pairs``: the pins collide through explicit ``<pair>``s with the board
+    pieces they can reach instead of MuJoCo's bounding-volume trees (the default). Both
+    simulate the same contacts and trajectories bit for bit; the pairs are cheaper only
+    while pins are pressed on the board and dearer everywhere else, because every pair is
+    tested every step (``benchmarks/README.md``, issue 19), so they are not the default.
+    """
     if not isinstance(spec, (CircularSocket, PolygonSocket)):
         raise ValueError(f"spec={spec!r} is not a socket; allowed: CircularSocket, PolygonSocket")
     board_assets, board_body = _board_xml(spec)
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
+    pairs = _contact_pairs(spec) if contact_pairs else []
+    # With pairs, the pins take no part in automatic collision; a pair's contact
+    # parameters are what the two geoms' defaults mix to (friction: the larger of each).
+    pin_bits = 'contype="0" conaffinity="0"' if contact_pairs else 'contype="2" conaffinity="1"'
+    pair_default = (
+        [
+            f'<pair condim="3" friction="{nums((FRICTION, FRICTION, 0.005, 0.0001, 0.0001))}" '
+            f'solref="{SOLREF}" solimp="{SOLIMP}" margin="0" gap="0"/>'
+        ]
+        if contact_pairs
+        else []
+    )
     extent = scene_extent(spec)
     carrier = carrier_half_size(spec)
     slide_mass = SLIDE_ARMATURE + 0.1
@@ -232,11 +286,12 @@ def make_mjcf(spec: SocketSpec) -> str:
         "<default>",
         f'<geom solref="{SOLREF}" solimp="{SOLIMP}" friction="{num(FRICTION)} 0.005 0.0001" '
         'condim="3" margin="0" gap="0"/>',
+        *pair_default,
         '<default class="board">',
         '<geom contype="1" conaffinity="2" rgba="0.25 0.45 0.3 1"/>',
         "</default>",
         '<default class="pin">',
-        '<geom contype="2" conaffinity="1" rgba="0.85 0.7 0.3 1"/>',
+        f'<geom {pin_bits} rgba="0.85 0.7 0.3 1"/>',
         "</default>",
         "</default>",
         "<asset>",
@@ -265,6 +320,7 @@ def make_mjcf(spec: SocketSpec) -> str:
         "</body>",
         "</body>",
         "</worldbody>",
+        *(["<contact>", *pairs, "</contact>"] if pairs else []),
         "<actuator>",
         _servo("ux", "x", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[0]),
         _servo("uy", "y", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[1]),

@@ -192,3 +192,52 @@ def test_cli_writes_a_recipe_and_refuses_to_overwrite_it(tmp_path, capsys):
     assert dataset.storage.metadata["tolins_env"] == "tolins/Circle2x2-v1"
     assert main(argv) == 2
     assert "exists; allowed: a new --name" in capsys.readouterr().err
+
+
+def _train(argv, out):
+    return main(["train", *argv, "--out", str(out)])
+
+
+def test_bc_from_a_safe_expert_dataset_equals_todays_pi_bc(tmp_path, capsys):
+    """Same seed, same demonstrations: ``--demos`` gives π_bc bit for bit."""
+    from tolins.learning.policy import load_policy
+
+    env = "tolins/Circle2x2-v1"
+    _write(tmp_path / "datasets", env, ["safe"], 6, "kinematic", seed=1)
+    argv = ["bc", "--env", env, "--backend", "kinematic", "--seed", "1", "--epochs", "4"]
+    assert _train([*argv, "--demonstrations", "6"], tmp_path / "expert") == 0
+    dataset = str(tmp_path / "datasets" / NAME)
+    assert _train([*argv, "--demos", dataset], tmp_path / "minari") == 0
+    today, _ = load_policy(tmp_path / "expert" / "policy.pt")
+    from_dataset, _ = load_policy(tmp_path / "minari" / "policy.pt")
+    assert np.array_equal(today.get_flat(), from_dataset.get_flat())
+    run = json.loads((tmp_path / "minari" / "run.json").read_text())
+    assert run["configs"]["demos"] == {"dataset": dataset, "episodes": 6}
+
+
+def test_train_refuses_a_dataset_of_another_env_before_any_work(tmp_path, capsys):
+    _write(tmp_path / "datasets", "tolins/Circle2x2-v1", ["safe"], 2, "kinematic")
+    dataset = str(tmp_path / "datasets" / NAME)
+    for method in ("bc", "rs-gail"):
+        code = _train([method, "--env", "tolins/Square-v1", "--demos", dataset], tmp_path / "out")
+        assert code == 2
+        assert "allowed: episodes of tolins/Square-v1" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_rs_gail_from_a_safe_expert_dataset_equals_todays(tmp_path):
+    """RS-GAIL (BC start and discriminator) from the dataset: the same π_n bit for bit."""
+    from tolins.learning.policy import load_policy
+
+    env = "tolins/Circle2x2-v1"
+    _write(tmp_path / "datasets", env, ["safe"], 4, "kinematic", seed=2)
+    argv = ["rs-gail", "--env", env, "--backend", "kinematic", "--seed", "2", "--epochs", "3"]
+    argv += ["--iterations", "2", "--popsize", "4", "--episodes", "1", "--eval-episodes", "2"]
+    assert _train([*argv, "--demonstrations", "4"], tmp_path / "expert") == 0
+    assert _train([*argv, "--demos", str(tmp_path / "datasets" / NAME)], tmp_path / "minari") == 0
+    today, _ = load_policy(tmp_path / "expert" / "policy.pt")
+    from_dataset, _ = load_policy(tmp_path / "minari" / "policy.pt")
+    assert np.array_equal(today.get_flat(), from_dataset.get_flat())
+    assert np.array_equal(
+        np.load(tmp_path / "expert" / "means.npy"), np.load(tmp_path / "minari" / "means.npy")
+    )

@@ -19,7 +19,7 @@ import numpy as np
 
 from tolins.datasets.envspec import tolins_ids
 from tolins.datasets.writer import UNITS
-from tolins.learning.demonstrations import Rollout
+from tolins.rollouts.episodes import Rollout
 
 
 def dataset_folder(source: str | os.PathLike) -> Path:
@@ -84,7 +84,7 @@ def check_dataset(dataset: Any, env_id: str | None, label: str) -> None:
 
 
 def to_rollout(episode: Any) -> Rollout:
-    """A Minari episode as the learners' :class:`~tolins.learning.demonstrations.Rollout`
+    """A Minari episode as the learners' :class:`~tolins.rollouts.episodes.Rollout`
     (the ``T`` observations each action answered, the ``T`` actions)."""
     infos = episode.infos or {}
     success = infos["success"][-1] if "success" in infos else episode.terminations[-1]

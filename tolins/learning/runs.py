@@ -8,6 +8,7 @@ seed and ``tolins.__version__`` (:func:`tolins.learning.artefacts.run_metadata`)
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +29,15 @@ from tolins.rollouts.pool import CandidatePool
 MEANS = "means.npy"
 
 
+@dataclass(frozen=True)
+class Demos:
+    """Demonstrations from elsewhere (a Minari dataset, ``tolins train --demos``): where
+    they came from (recorded in ``run.json``) and their episodes."""
+
+    source: str
+    rollouts: list[Rollout]
+
+
 def demonstrations(env_ids: list[str], task: TaskConfig) -> list[Rollout]:
     """The expert's episodes on each env (seeded from ``task.seed`` and the env's index)."""
     episodes = []
@@ -37,11 +47,22 @@ def demonstrations(env_ids: list[str], task: TaskConfig) -> list[Rollout]:
     return episodes
 
 
-def run_bc(env_id: str, task: TaskConfig, bc: BCConfig, out: str | Path) -> BCResult:
-    """Clone the expert; write ``policy.pt``, ``bc_loss.csv`` and ``run.json``."""
+def _demos_metadata(demos: Demos | None) -> dict[str, Any]:
+    """What a run records of demonstrations read from a dataset (nothing for the expert's)."""
+    if demos is None:
+        return {}
+    return {"demos": {"dataset": demos.source, "episodes": len(demos.rollouts)}}
+
+
+def run_bc(
+    env_id: str, task: TaskConfig, bc: BCConfig, out: str | Path, *, demos: Demos | None = None
+) -> BCResult:
+    """Clone the expert (or the episodes of ``demos``, read from a dataset); write
+    ``policy.pt``, ``bc_loss.csv`` and ``run.json``."""
     out = Path(out)
-    metadata = run_metadata(task.seed, env=env_id, task=task, bc=bc)
-    result = behaviour_clone(demonstrations([env_id], task), bc, seed=task.seed)
+    metadata = run_metadata(task.seed, env=env_id, task=task, bc=bc, **_demos_metadata(demos))
+    expert = demonstrations([env_id], task) if demos is None else demos.rollouts
+    result = behaviour_clone(expert, bc, seed=task.seed)
     save_policy(out / "policy.pt", result.policy, metadata)
     rows = [{"epoch": i, "loss": loss} for i, loss in enumerate(result.losses)]
     write_curves_csv(out / "bc_loss.csv", rows)
@@ -66,16 +87,26 @@ def run_rs_gail(
     resume: bool = False,
     progress: bool = True,
     pool: CandidatePool | None = None,
+    demos: Demos | None = None,
 ) -> RSGailResult:
-    """π_n: RS-GAIL from the BC policy ``init`` (or one cloned here with ``bc``)."""
+    """π_n: RS-GAIL from the BC policy ``init`` (or one cloned here with ``bc``), imitating
+    the expert (or the episodes of ``demos``, read from a dataset)."""
     out = Path(out)
     start = None if init is None else _relative(init, out)
-    metadata = run_metadata(task.seed, env=env_id, init=start, task=task, bc=bc, rs_gail=rs_gail)
+    metadata = run_metadata(
+        task.seed,
+        env=env_id,
+        init=start,
+        task=task,
+        bc=bc,
+        rs_gail=rs_gail,
+        **_demos_metadata(demos),
+    )
     if resume:
         check_resumable(out, metadata)
     if init is not None:
         policy, _ = load_policy(init, kind="nominal")
-    expert = demonstrations([env_id], task)
+    expert = demonstrations([env_id], task) if demos is None else demos.rollouts
     if init is None:
         policy = behaviour_clone(expert, bc, seed=task.seed).policy
     result = train_rs_gail(

@@ -43,6 +43,13 @@ def add_train_parser(commands: argparse._SubParsersAction) -> None:
         parser.add_argument("--out", required=True, help=out_help)
         for config in configs:
             add_config_arguments(parser, config)
+        if method in ("bc", "rs-gail"):
+            parser.add_argument(
+                "--demos",
+                metavar="DATASET",
+                help="demonstrations from a Minari dataset of --env (a folder or a local id; "
+                "docs/datasets.md) instead of the expert's (--expert, --demonstrations unused)",
+            )
         if method == "rs-gail":
             parser.add_argument("--init", help="BC policy.pt to start from (default: clone here)")
         if method == "tolerance-guided":
@@ -65,11 +72,28 @@ def _check_paths(args: argparse.Namespace) -> None:
         )
 
 
+def _demos(args: argparse.Namespace):
+    """The episodes of ``--demos`` (a :class:`~tolins.learning.runs.Demos`), checked
+    against ``--env``; ``None`` without the option. Raises ``ValueError``."""
+    if getattr(args, "demos", None) is None:
+        return None
+    try:
+        from tolins.datasets.reader import load_demonstrations
+    except ImportError as error:
+        raise cli_checks.OptionError(
+            f"--demos needs Minari ({error}); allowed: after pip install 'tolins[data]'"
+        ) from None
+    from tolins.learning.runs import Demos
+
+    return Demos(str(args.demos), load_demonstrations(args.demos, args.env))
+
+
 def _run(args: argparse.Namespace) -> int:
     prog = f"tolins train {args.method}"
     try:
         configs = {cls.__name__: config_from_args(cls, args) for cls in _CONFIGS[args.method]}
         _check_paths(args)
+        demos = _demos(args)
     except ValueError as error:  # OptionError too
         return cli_checks.fail(prog, error)
     from tolins.learning import runs
@@ -77,7 +101,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         task = configs["TaskConfig"]
         if args.method == "bc":
-            result = runs.run_bc(args.env, task, configs["BCConfig"], args.out)
+            result = runs.run_bc(args.env, task, configs["BCConfig"], args.out, demos=demos)
             print(
                 f"wrote {args.out}: BC loss {result.losses[0]:.4f} → {result.losses[-1]:.4f}, "
                 f"held-out {result.held_out_loss:.4f} ({result.held_out_episodes} episodes)"
@@ -92,6 +116,7 @@ def _run(args: argparse.Namespace) -> int:
                 args.out,
                 init=args.init,
                 resume=args.resume,
+                demos=demos,
             )
         else:
             result = runs.run_tolerance_guided(

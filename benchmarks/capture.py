@@ -1,0 +1,104 @@
+"""The capture table of docs/environments.md ("Why 1 ms"): largest offsets that insert.
+
+Usage::
+
+    python benchmarks/capture.py                   # 4 cases × 2 speeds, about a minute
+    python benchmarks/capture.py --eager-sensors   # the control step before issue 19
+
+For each case (2*2 socket offset in x and in theta, square and hexagon peg offset in
+x) and push speed (2.5 and 0.5 mm/s), the offset is bisected between one that inserts
+and one that is blocked: ``InsertionEnv(socket, measurement_noise=0)``, reset at
+``[offset, 0, 0, 0.05]`` (or ``[0, 0, offset, 0.05]``), action ``[0, 0, 0, -speed]``
+until success (tips 1 mm down) or 5 control steps (fast) / 10 (slow), as in
+``physics_vs_geometry.py``. The result is the largest offset found to insert, to
+``--resolution`` (default 0.01 µm, 0.001 mrad); the excess over the geometric limit is
+the capture.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from tolins import CircularSocket, PolygonSocket
+from tolins.envs import InsertionEnv
+from tolins.envs.mujoco_backend import ServoStepper
+
+FAST, SLOW = 2.5, 0.5
+STEPS = {FAST: 5, SLOW: 10}
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    socket: object
+    axis: int  # 0: x, 2: theta
+    limit: float  # geometric limit (mm or rad)
+    inside: float  # an offset that inserts
+    outside: float  # one that is blocked
+
+
+CASES = [
+    Case("2*2, x", CircularSocket(2, 2), 0, 0.2, 0.195, 0.22),
+    Case("2*2, θ", CircularSocket(2, 2), 2, 0.0499, 0.049, 0.054),
+    Case("square, x", PolygonSocket(4, 1.5, 1.65), 0, 0.1061, 0.100, 0.12),
+    Case("hexagon, x", PolygonSocket(6, 1.2, 1.26), 0, 0.0520, 0.047, 0.065),
+]
+
+
+def inserts(env: InsertionEnv, axis: int, offset: float, speed: float) -> bool:
+    """Whether a push down at ``speed`` from ``offset`` on ``axis`` inserts."""
+    pose = np.array([0.0, 0.0, 0.0, 0.05])
+    pose[axis] = offset
+    env.reset(options={"pose": pose})
+    for _ in range(STEPS[speed]):
+        *_, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
+        if info["success"]:
+            return True
+        if terminated or truncated:
+            break
+    return False
+
+
+def largest_inserting(case: Case, speed: float, resolution: float) -> float:
+    """Bisection between ``case.inside`` and ``case.outside``; ``ValueError`` if they do
+    not bracket the change."""
+    env = InsertionEnv(case.socket, measurement_noise=0)
+    lo, hi = case.inside, case.outside
+    if not inserts(env, case.axis, lo, speed) or inserts(env, case.axis, hi, speed):
+        raise ValueError(f"{case.name} at {speed} mm/s: {lo}..{hi} does not bracket the change")
+    while hi - lo > resolution:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if inserts(env, case.axis, mid, speed) else (lo, mid)
+    return lo
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--resolution", type=float, default=1e-5, help="mm (x) and 1/10 of it in rad (theta)"
+    )
+    parser.add_argument(
+        "--eager-sensors", action="store_true", help="sensors in every physics step (before 19)"
+    )
+    args = parser.parse_args(argv)
+    ServoStepper.lazy_sensors = not args.eager_sensors
+    start = time.perf_counter()
+    print("| case | 2.5 mm/s | 0.5 mm/s | capture fast / slow (µm or mrad) |")
+    print("|---|---|---|---|")
+    for case in CASES:
+        step = args.resolution / (10 if case.axis == 2 else 1)
+        fast, slow = (largest_inserting(case, s, step) for s in (FAST, SLOW))
+        print(
+            f"| {case.name} ({case.limit:g}) | {fast:.5f} | {slow:.5f} | "
+            f"{(fast - case.limit) * 1e3:+.1f} / {(slow - case.limit) * 1e3:+.1f} |"
+        )
+    print(f"total {time.perf_counter() - start:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

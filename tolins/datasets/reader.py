@@ -29,10 +29,9 @@ def dataset_folder(source: str | os.PathLike) -> Path:
     for candidate in (path / "data", path):
         if (candidate / "metadata.json").is_file():
             return candidate
-    if not path.exists() and not path.is_absolute():
-        from minari.storage.datasets_root_dir import get_dataset_path
-
-        by_id = Path(get_dataset_path(str(source))) / "data"
+    if not path.exists() and not path.is_absolute():  # Minari's root, without creating it
+        root = os.environ.get("MINARI_DATASETS_PATH", Path.home() / ".minari" / "datasets")
+        by_id = Path(root) / str(source) / "data"
         if (by_id / "metadata.json").is_file():
             return by_id
     raise ValueError(

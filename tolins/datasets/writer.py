@@ -123,7 +123,7 @@ def check_target(root: str | os.PathLike, name: str) -> Path:
             f"--name {name!r} is not a Minari dataset id; allowed: (namespace/)name-vN, "
             "e.g. tolins/circle2x2/expert-safe-v0"
         ) from None
-    target = Path(root) / name
+    target = Path(root).resolve() / name
     if target.exists():
         raise ValueError(f"{target} exists; allowed: a new --name or --out (or remove it)")
     return target

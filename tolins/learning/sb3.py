@@ -28,6 +28,9 @@ try:
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from tolins.rollouts.sb3_vec import Sb3VectorEnv
 except ImportError as error:  # pragma: no cover - the rl extra is part of the test extra
     raise ImportError(
         "tolins.learning.sb3 needs stable-baselines3: pip install 'tolins[rl]'"
@@ -58,10 +61,17 @@ class ScaledObservation(BaseFeaturesExtractor):
 
 
 def make_model(config: Sb3Config, **overrides):
-    """An untrained SB3 model of ``config`` on its wrapped training env: SB3's defaults but
+    """An untrained SB3 model of ``config`` on ``config.n_envs`` training envs stepped in one
+    batch (:class:`~tolins.rollouts.sb3_vec.Sb3VectorEnv`): SB3's defaults but
     :data:`HYPERPARAMETERS` (and ``overrides``, keywords of the SB3 algorithm)."""
-    env = agent_env(config.env_id, backend=config.backend, reward_mode=config.reward_mode)
-    env.reset(seed=config.seed)
+    env = VecMonitor(
+        Sb3VectorEnv(
+            config.env_id,
+            config.n_envs,
+            backend=config.backend,
+            reward_mode=config.reward_mode,
+        )
+    )
     kwargs = {**HYPERPARAMETERS[config.algorithm], **overrides}
     kwargs["policy_kwargs"] = {
         "features_extractor_class": ScaledObservation,

@@ -27,6 +27,8 @@ class Sb3Config:
         curve_every: Env steps between two points of the learning curve.
         curve_episodes: Sparse-reward episodes per point.
         seed: Seed of the model and the training env.
+        n_envs: Training envs stepped side by side (one batch: SB3's ``n_envs``; PPO
+            collects ``n_steps`` per env, SAC one transition per env per step).
     """
 
     algorithm: str
@@ -37,12 +39,13 @@ class Sb3Config:
     curve_every: int = 10_000
     curve_episodes: int = 8
     seed: int = 0
+    n_envs: int = 1
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHM_NAMES:
             allowed = ", ".join(ALGORITHM_NAMES)
             raise ValueError(f"algorithm={self.algorithm!r}; allowed: {allowed}")
         check_reward_mode(self.reward_mode)
-        for name in ("env_steps", "curve_every", "curve_episodes"):
+        for name in ("env_steps", "curve_every", "curve_episodes", "n_envs"):
             check_int(name, getattr(self, name), minimum=1)
         check_seed("seed", self.seed)

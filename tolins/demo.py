@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import gymnasium as gym
 from tqdm import tqdm
 
-from tolins.envs.tasks import TASKS, Task
+from tolins.envs.tasks import TASKS
 from tolins.policies.experts import EXPERTS
-from tolins.rollouts.episodes import Summary, run_episode, summarise
+from tolins.rollouts.episodes import Summary, summarise
+from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
 
 @dataclass(frozen=True)
@@ -22,14 +21,6 @@ class DemoRow:
     summary: Summary
 
 
-def _evaluate(task: Task, expert: str, episodes: int, seed: int, backend: str) -> DemoRow:
-    env = gym.make(task.gym_id, backend=backend).unwrapped
-    policy = EXPERTS[expert]()
-    results = [run_episode(env, policy, seed=seed + i) for i in range(episodes)]
-    env.close()
-    return DemoRow(task.gym_id, expert, summarise(results))
-
-
 def run_demo(
     episodes: int = 20,
     seed: int = 0,
@@ -38,19 +29,30 @@ def run_demo(
     progress: bool = True,
 ) -> list[DemoRow]:
     """Roll out both experts for ``episodes`` episodes (seeds ``seed``, ``seed + 1``, ...)
-    in every preset environment, on ``workers`` threads. Results do not depend on
-    ``workers``: each job owns its environment and seeds."""
+    in every preset environment, side by side in one vector env per preset stepped on
+    ``workers`` threads (:func:`tolins.rollouts.runner.run_jobs`). Results do not depend
+    on ``workers``: each episode is the single env's from its seed."""
     if episodes < 1 or workers < 1:
         raise ValueError(f"episodes={episodes!r}, workers={workers!r}; allowed: both ≥ 1")
-    jobs = [(task, expert) for task in TASKS for expert in EXPERTS]
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_evaluate, t, e, episodes, seed, backend) for t, e in jobs]
-        bar = tqdm(total=len(futures), desc="demo", unit="env×expert", disable=not progress)
-        rows = []
-        for future in futures:
-            rows.append(future.result())
+    experts = list(EXPERTS)
+    envs = VectorEnvCache(backend, num_envs=min(2 * episodes, 32), num_threads=workers)
+    rows = []
+    try:
+        bar = tqdm(total=len(TASKS), desc="demo", unit="env", disable=not progress)
+        for task in TASKS:
+            jobs = [
+                Job(task.gym_id, EXPERTS[expert](), seed + i)
+                for expert in experts
+                for i in range(episodes)
+            ]
+            results = [episode for _, episode in run_jobs(envs, jobs)]
+            for k, expert in enumerate(experts):
+                mine = results[k * episodes : (k + 1) * episodes]
+                rows.append(DemoRow(task.gym_id, expert, summarise(mine)))
             bar.update()
         bar.close()
+    finally:
+        envs.close()
     return rows
 
 

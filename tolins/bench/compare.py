@@ -13,11 +13,14 @@ whose runs differ by evaluation alone).
 
 A row *differs* when its CI lies beyond that margin (A higher or B higher) and is
 *consistent* otherwise: no difference was detected at that resolution, which is what a
-reproduction can show.
+reproduction can show. A row is *not comparable* when its eval env differs between A and
+B, or the runs' backend or profile do (a field a run does not state, such as the profile
+of ``tolins evaluate --out``, is not held against it): its interval is still given.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +38,7 @@ from tolins.bench.statistics import (
 from tolins.bench.table import ROW_IDS, ROWS
 
 CONSISTENT, A_HIGHER, B_HIGHER = "consistent", "differs: A higher", "differs: B higher"
+NOT_COMPARABLE = "not comparable"
 #: Rows of a scripted expert: nothing trained, no training variance.
 _EXPERTS = frozenset(row.id for row in ROWS if not row.trainings)
 
@@ -48,10 +52,15 @@ class RowDifference:
     b: dict[str, Any]
     difference: Interval
     margin: float
+    not_comparable: str | None = None
+    """What differs between the two runs of the row (eval env, backend, profile), if any."""
 
     @property
     def status(self) -> str:
-        """:data:`CONSISTENT`, :data:`A_HIGHER` or :data:`B_HIGHER`."""
+        """:data:`CONSISTENT`, :data:`A_HIGHER`, :data:`B_HIGHER` or, when the runs differ
+        in what they measured, :data:`NOT_COMPARABLE` (``... (why)``)."""
+        if self.not_comparable:
+            return f"{NOT_COMPARABLE} ({self.not_comparable})"
         return {0: CONSISTENT, 1: A_HIGHER, -1: B_HIGHER}[sign(self.difference, self.margin)]
 
 
@@ -94,9 +103,11 @@ def compare(source_a: str, source_b: str) -> Comparison:
     rows = []
     for row_id in shared:
         try:
-            rows.append(_row_difference(row_id, rows_a[row_id], rows_b[row_id]))
+            row = _row_difference(row_id, rows_a[row_id], rows_b[row_id])
         except ValueError as error:
             raise ValueError(f"row {row_id}: {error}") from None
+        why = _not_comparable(a, b, rows_a[row_id], rows_b[row_id])
+        rows.append(dataclasses.replace(row, not_comparable=why) if why else row)
     return Comparison(
         source_a,
         source_b,
@@ -116,6 +127,16 @@ def _row_difference(row_id: str, a: dict[str, Any], b: dict[str, Any]) -> RowDif
     interval = difference(x, y, over)
     trained = 0 if row_id in _EXPERTS else 2  # a row unknown to the table counts as trained
     return RowDifference(row_id, a, b, interval, margin(interval, trained))
+
+
+def _not_comparable(
+    a: dict[str, Any], b: dict[str, Any], row_a: dict[str, Any], row_b: dict[str, Any]
+) -> str | None:
+    """What differs between two runs of one row (``None`` stated on a side: not held)."""
+    pairs = [("eval env", row_a.get("eval_env"), row_b.get("eval_env"))]
+    pairs += [(key, a.get(key), b.get(key)) for key in ("backend", "profile")]
+    differ = [f"{key} {x} vs {y}" for key, x, y in pairs if None not in (x, y) and x != y]
+    return ", ".join(differ) or None
 
 
 def _episodes(entry: dict[str, Any]) -> list[float]:
@@ -171,6 +192,9 @@ def format_comparison(result: Comparison) -> str:
         lines.append("| " + " | ".join(cells) + " |")
     consistent = sum(r.status == CONSISTENT for r in result.rows)
     lines += ["", f"{consistent} of {len(result.rows)} shared rows consistent."]
+    apart = sum(r.not_comparable is not None for r in result.rows)
+    if apart:
+        lines.append(f"{apart} not comparable: their runs measured something else (status).")
     if any(r.difference.over == EPISODES for r in result.rows):
         lines.append(
             "Over episodes: a run has one training seed, so the CI leaves training variance "
@@ -195,6 +219,7 @@ def comparison_json(result: Comparison) -> dict[str, Any]:
                 "difference": row.difference.to_json(),
                 "margin": row.margin,
                 "status": row.status,
+                "not_comparable": row.not_comparable,
             }
             for row in result.rows
         },

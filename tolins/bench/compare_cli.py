@@ -29,7 +29,10 @@ def add_compare_parser(commands: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from tolins.bench.compare import compare, comparison_json, format_comparison
+    from tolins.cli_checks import output_file
 
+    if args.json:
+        output_file("--json", args.json, suffixes=(".json",))
     try:
         result = compare(args.a, args.b)
     except ValueError as error:

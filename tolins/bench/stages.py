@@ -2,11 +2,13 @@
 
 A stage writes into its own folder ``DIR/stages/{name}-{key}`` (``key``: the first 12
 hex digits of the SHA-256 of its canonical JSON config). It counts as finished only once
-``stage.json`` (config and wall time) is there, written atomically after everything
-else: an interrupted stage is run again (an RS-GAIL stage resumes from its checkpoint),
-and a finished one is never run twice. Every file of a stage is written atomically by
-the one task that runs it (the executors submit each stage once), so any number of
-workers can fill one cache.
+``stage.json`` (config, wall time and the SHA-256 of every file it wrote) is there,
+written atomically after everything else: an interrupted stage is run again (an RS-GAIL
+stage resumes from its checkpoint), and a finished one is never run twice. A finished
+folder whose files are missing or differ from their digests is bad:
+:meth:`StageCache.discard_bad` moves it aside (``stages/.bad/``) and says why, and the
+stage runs afresh. Every file of a stage is written atomically by the one task that runs
+it (the executors submit each stage once), so any number of workers can fill one cache.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from tolins.atomic import atomic_json
+from tolins.bench.integrity import digest_problem, folder_digests, read_json
 
 MARKER = "stage.json"
 
@@ -55,6 +58,7 @@ class StageCache:
         began, started = time.perf_counter(), time.time()
         build(folder)
         record = {
+            "files": folder_digests(folder, skip=(MARKER,)),
             "name": name,
             "config": dict(config),
             "wall_s": time.perf_counter() - began,
@@ -66,11 +70,37 @@ class StageCache:
         atomic_json(folder / MARKER, record, sort_keys=True)
         return folder, False
 
+    def problem(self, folder: Path) -> str | None:
+        """Why the finished stage in ``folder`` is bad (``None``: its marker is readable
+        and every file it wrote is there with its digest)."""
+        try:
+            marker = read_json(folder / MARKER)
+            if not isinstance(marker, dict) or not isinstance(marker.get("wall_s"), float):
+                return f"{MARKER} is not a stage record"
+        except ValueError as error:
+            return str(error).removeprefix(f"{folder / MARKER}: ")
+        return digest_problem(folder, marker.get("files"))
+
+    def discard_bad(self, name: str, config: Mapping[str, Any]) -> str | None:
+        """Move the stage's finished folder aside when it is bad (:meth:`problem`), so
+        that the stage runs again; the line that says so, else ``None``."""
+        folder = self.folder(name, config)
+        if not (folder / MARKER).is_file():
+            return None
+        problem = self.problem(folder)
+        if problem is None:
+            return None
+        aside = self.root / ".bad" / f"{folder.name}-{time.time_ns()}"
+        aside.parent.mkdir(parents=True, exist_ok=True)
+        os.replace(folder, aside)
+        return f"{folder}: bad ({problem}); moved to {aside}, running the stage again"
+
     def record(self, folder: Path) -> dict[str, Any]:
         """The marker of the finished stage in ``folder``: its config, wall time, when
-        (``started``, ``finished``: Unix time) and where (``host``, ``pid``) it ran."""
-        return json.loads((folder / MARKER).read_text())
+        (``started``, ``finished``: Unix time), where (``host``, ``pid``) it ran, and
+        ``files`` (the SHA-256 of each file it wrote)."""
+        return read_json(folder / MARKER)
 
     def wall_s(self, folder: Path) -> float:
         """The wall time (s) the finished stage in ``folder`` took when it ran."""
-        return float(json.loads((folder / MARKER).read_text())["wall_s"])
+        return float(self.record(folder)["wall_s"])

@@ -1,0 +1,245 @@
+"""Files a user may be handed are data: no loader of tolins runs code planted in one
+(docs/security.md). Each test plants a pickle whose unpickling creates a marker file and
+checks that loading the file did not create it (and, where tolins can unpickle on
+request, that the payload is real: the marker appears then)."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import pickle
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+import tolins
+from tolins.cli import main
+from tolins.learning.policy_config import BCConfig, RSGailConfig
+
+ENV = "tolins/Circle2x2-v1"
+
+
+class Payload:
+    """Unpickling this creates ``marker`` (``open(marker, "w")``)."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def _payload(marker: Path) -> bytes:
+    return pickle.dumps(Payload(marker))
+
+
+# --- RS-GAIL checkpoints (tolins train rs-gail --resume, bench stage folders) ---------
+
+
+@pytest.fixture(scope="module")
+def interrupted(tmp_path_factory):
+    """An RS-GAIL run interrupted after 2 of 4 iterations, and the same run uninterrupted."""
+    from tolins.learning.bc import behaviour_clone
+    from tolins.learning.demonstrations import collect
+    from tolins.learning.rs_gail import Workpiece, train_rs_gail
+
+    demos = collect(ENV, "safe", 8, seed=0, backend="kinematic")
+    start = behaviour_clone(demos, BCConfig(epochs=5, batch_size=64), seed=0).policy
+    config = RSGailConfig(iterations=4, popsize=4, episodes=1, eval_episodes=2, sigma0=0.05)
+    root = tmp_path_factory.mktemp("rs")
+
+    def train(out, **kwargs):
+        return train_rs_gail(
+            start.with_flat(start.get_flat()),
+            [Workpiece(ENV)],
+            demos,
+            config,
+            seed=0,
+            backend="kinematic",
+            out=out,
+            metadata={"test": 1},
+            progress=False,
+            **kwargs,
+        )
+
+    def stop(iteration, _row):
+        if iteration == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        train(root / "cut", on_iteration=stop)
+    return train, root / "cut" / "checkpoint.pt", train(root / "whole")
+
+
+def _copy_run(checkpoint: Path, folder: Path, edit) -> Path:
+    folder.mkdir()
+    payload = torch.load(checkpoint, weights_only=True)
+    edit(payload)
+    torch.save(payload, folder / "checkpoint.pt")
+    return folder
+
+
+def test_an_rs_gail_checkpoint_holds_no_pickle_and_resumes_identically(interrupted, tmp_path):
+    train, checkpoint, whole = interrupted
+    payload = torch.load(checkpoint, weights_only=True)
+    assert "es" not in payload and payload["told"].shape == (2, 4)
+    marker = tmp_path / "ran"
+
+    def plant(p):  # the 0.3.0 layout's pickled strategy, beside the arrays
+        p["es"] = torch.frombuffer(bytearray(_payload(marker)), dtype=torch.uint8)
+
+    resumed = train(_copy_run(checkpoint, tmp_path / "planted", plant), resume=True)
+    assert not marker.exists()
+    np.testing.assert_array_equal(resumed.means, whole.means)
+    assert resumed.final == whole.final
+
+
+def test_an_old_checkpoint_with_a_pickled_strategy_is_refused_unrun(interrupted, tmp_path):
+    train, checkpoint, _ = interrupted
+    marker = tmp_path / "ran"
+
+    def old(p):
+        p["format"] = "tolins.rs_gail_run/1"
+        p["es"] = torch.frombuffer(bytearray(_payload(marker)), dtype=torch.uint8)
+
+    with pytest.raises(ValueError, match=r"format 'tolins\.rs_gail_run/1'"):
+        train(_copy_run(checkpoint, tmp_path / "old", old), resume=True)
+    assert not marker.exists()
+
+
+def test_an_edited_cma_es_state_is_refused(interrupted, tmp_path):
+    train, checkpoint, _ = interrupted
+
+    def edit(p):  # the ranking of the first iteration reversed: another mean follows
+        p["told"][0] = -p["told"][0]
+
+    with pytest.raises(ValueError, match="does not replay"):
+        train(_copy_run(checkpoint, tmp_path / "edited", edit), resume=True)
+
+
+# --- torch checkpoints: policy files, embedding checkpoints -------------------------
+
+
+@pytest.mark.parametrize("kind", ["policy", "embedding"])
+def test_a_torch_checkpoint_with_a_pickled_object_is_refused_unrun(tmp_path, kind):
+    from tolins.learning.checkpoint import load_checkpoint
+    from tolins.learning.policy import load_policy
+
+    marker = tmp_path / "ran"
+    path = tmp_path / "planted.pt"
+    torch.save({"format": "x", "state_dict": Payload(marker)}, path)
+    load = load_policy if kind == "policy" else load_checkpoint
+    with pytest.raises(ValueError, match=r"holds objects other than tensors .* would run code"):
+        load(path)
+    assert not marker.exists()
+
+
+def test_evaluate_of_a_planted_policy_file_exits_2_unrun(tmp_path, capsys):
+    marker = tmp_path / "ran"
+    path = tmp_path / "policy.pt"
+    torch.save({"format": "tolins.policy/1", "architecture": Payload(marker)}, path)
+    args = ["evaluate", "--policy", str(path), "--env", ENV, "--backend", "kinematic"]
+    assert main([*args, "--episodes", "1"]) == 2
+    assert not marker.exists()
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+# --- SB3 zips (tolins evaluate / record --policy X.zip) ------------------------------
+
+
+def _sb3_zip(tmp_path: Path, algorithm: str) -> Path:
+    pytest.importorskip("stable_baselines3")
+    from tolins.learning.sb3 import make_model
+    from tolins.learning.sb3_config import Sb3Config
+
+    model = make_model(Sb3Config(algorithm, ENV, backend="kinematic", env_steps=10))
+    path = tmp_path / f"{algorithm}.zip"
+    model.save(path)
+    return path
+
+
+def _replace_data(path: Path, out: Path, edit) -> Path:
+    with zipfile.ZipFile(path) as source, zipfile.ZipFile(out, "w") as target:
+        for item in source.namelist():
+            content = source.read(item)
+            if item == "data":
+                data = json.loads(content)
+                edit(data)
+                content = json.dumps(data).encode()
+            target.writestr(item, content)
+    return out
+
+
+@pytest.mark.parametrize("algorithm", ["ppo", "sac"])
+def test_an_sb3_zip_loads_without_unpickling_and_acts_as_sb3s_load(tmp_path, algorithm):
+    from tolins.learning.external import load_sb3
+
+    marker = tmp_path / "ran"
+    serialized = base64.b64encode(_payload(marker)).decode()
+
+    def plant(data):
+        for key in ("policy_kwargs", "observation_space", "action_space", "policy_class"):
+            data[key][":serialized:"] = serialized
+
+    path = _replace_data(_sb3_zip(tmp_path, algorithm), tmp_path / "planted.zip", plant)
+    actor = load_sb3(path)
+    assert not marker.exists()
+    observation = np.array([0.4, -0.3, 0.02, 16.0, 0.1, 0.2, 0.0, 0.3])
+    unpickled = load_sb3(_sb3_zip(tmp_path, algorithm), trust_pickle=True)
+    np.testing.assert_array_equal(actor(observation), unpickled(observation))
+    with pytest.raises(Exception):  # noqa: B017 - whatever SB3 makes of the planted objects
+        load_sb3(path, trust_pickle=True)
+    assert marker.exists()  # the payload is real: SB3's load ran it
+
+
+def test_an_sb3_zip_of_an_unknown_policy_is_refused_naming_the_risk(tmp_path, capsys):
+    def custom(data):
+        data["policy_kwargs"]["features_extractor_class"] = "<class 'evil.Extractor'>"
+
+    path = _replace_data(_sb3_zip(tmp_path, "ppo"), tmp_path / "custom.zip", custom)
+    args = ["evaluate", "--policy", str(path), "--env", ENV, "--backend", "kinematic"]
+    assert main([*args, "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "runs code" in err[0] and "--trust-pickle" in err[0], err
+
+
+def test_policy_help_says_module_name_is_code(capsys):
+    for command in ("evaluate", "record"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert "runs its code" in text and "--trust-pickle" in text, command
+
+
+# --- bench stage files (JSON, npy) -------------------------------------------------
+
+
+def test_a_pickled_npy_is_not_unpickled(tmp_path):
+    from tolins.bench.integrity import read_array
+
+    marker = tmp_path / "ran"
+    path = tmp_path / "means.npy"
+    np.save(path, np.array([Payload(marker)], dtype=object), allow_pickle=True)
+    with pytest.raises(ValueError, match=r"means\.npy"):
+        read_array(path)
+    assert not marker.exists()
+
+
+def test_the_docs_list_every_file_kind():
+    text = (Path(tolins.__file__).parents[1] / "docs" / "security.md").read_text()
+    kinds = ["checkpoint.pt", "policy.pt", "model.zip", "results.json", "stage.json"]
+    kinds += ["episodes.json", "means.npy", ".rrd", "MODULE:NAME", "--trust-pickle"]
+    for kind in kinds:
+        assert kind in text, kind
+    for page in ("benchmark.md", "agents.md"):
+        assert "security.md" in (Path(tolins.__file__).parents[1] / "docs" / page).read_text()
+
+
+def test_pickle_payload_helper_is_real(tmp_path):
+    marker = tmp_path / "ran"
+    pickle.load(io.BytesIO(_payload(marker)))
+    assert marker.exists()

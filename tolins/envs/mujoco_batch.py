@@ -24,7 +24,9 @@ import numpy as np
 from tolins.envs.batch import BatchState
 from tolins.envs.mujoco_backend import (
     _FORCE_SCALE,
+    _SENSORS_OFF,
     _SWAP_Z_THETA,
+    ServoStepper,
     _touch_sensors,
     board_wrench,
     default_contact_checks,
@@ -82,9 +84,11 @@ class MujocoBatch:
             contact_checks = default_contact_checks(self.substeps)
         self.checks = check_int("contact_checks", contact_checks, minimum=1, maximum=self.substeps)
         self.batch = mujoco.batch.Batch(self.model, self.num_envs, nthread=self.num_threads)
+        # Caller models throughout (the batch reads them live): a bent-pin draw replaces its
+        # simulation's, and the sensors are switched off on each for the steps before a read.
         self._models = [self.model] * self.num_envs
+        self.batch.set_models(self._models)
         self._sockets: list[SocketSpec] = [socket] * self.num_envs
-        self._own_models = False
         b = self.batch
         self._qpos, self._qvel = b.bind("qpos"), b.bind("qvel")
         self._act, self._ctrl = b.bind("act"), b.bind("ctrl")
@@ -103,9 +107,7 @@ class MujocoBatch:
         self._models[index] = (
             self.model if same else mujoco.MjModel.from_xml_string(make_mjcf(socket))
         )
-        if self._own_models or not same:
-            self.batch.set_models(self._models)
-            self._own_models = True
+        self.batch.set_models(self._models)
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
@@ -127,7 +129,7 @@ class MujocoBatch:
         for i in range(self.checks):
             n = chunk + (i < extra)
             if n:
-                self.batch.step(ids, nstep=n)
+                self._physics_steps(ids, n)
                 touch = _sequential_sum(self._sensordata[ids, self._touch])
                 peak = np.where(touch > peak, touch, peak)  # max(peak, touch), as Python's
         errors = tuple(
@@ -135,6 +137,23 @@ class MujocoBatch:
             for b, i in zip(before, ids.tolist(), strict=True)
         )
         return self._state(ids, peak * _FORCE_SCALE, errors)
+
+    def _physics_steps(self, ids: np.ndarray, n: int) -> None:
+        """``n`` physics steps of simulations ``ids``, the sensors computed only in the last
+        (as :class:`~tolins.envs.mujoco_backend.ServoStepper` with ``lazy_sensors``; the
+        sensor data read after it are the same bit for bit)."""
+        if ServoStepper.lazy_sensors and n > 1:
+            models = {id(self._models[i]): self._models[i] for i in ids.tolist()}.values()
+            flags = [(model, model.opt.disableflags) for model in models]
+            for model, value in flags:
+                model.opt.disableflags = value | _SENSORS_OFF
+            try:
+                self.batch.step(ids, nstep=n - 1)
+            finally:
+                for model, value in flags:
+                    model.opt.disableflags = value
+            n = 1
+        self.batch.step(ids, nstep=n)
 
     def _state(
         self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None

@@ -121,15 +121,17 @@ class ServoStepper:
         self._warnings = data.warning.number
         self._pin_geoms = {model.geom(f"pin{i}").id: i for i in range(n_pins)}
 
+    #: Attributes that view MjData's buffers: pickled, they would become frozen copies.
+    _VIEWS = ("_touch", "_wrench", "_warnings")
+
     def __getstate__(self) -> dict[str, object]:
-        # The views into MjData would be pickled as copies, frozen at the time of the
-        # copy; a copy keeps the model, the data (MjData pickles its whole state, solver
-        # warm start included) and the number of checks, and binds new views.
-        return {"model": self.model, "data": self.data, "checks": self.checks}
+        # A copy keeps the model, the data (MjData pickles its whole state, the solver's
+        # warm start included) and the settings, and binds new views into its own data.
+        return {k: v for k, v in self.__dict__.items() if k not in self._VIEWS}
 
     def __setstate__(self, state: dict[str, object]) -> None:
-        self.checks = state["checks"]
-        self._bind(state["model"], state["data"])
+        self.__dict__.update(state)
+        self._bind(self.model, self.data)
 
     def state(self, peak_force: float, error: str | None = None) -> BackendState:
         """The workpiece now: pose, wrench (N, N·mm, world axes) and the given peak force."""

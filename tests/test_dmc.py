@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import gymnasium as gym
 import numpy as np
 import pytest
 from absl.testing import absltest
@@ -195,6 +196,53 @@ def test_defective_domain_rebuilds_the_physics_with_a_new_workpiece() -> None:
     assert not np.array_equal(env.physics.named.model.geom_pos["pin0"], first_pins)
     assert isinstance(env.physics.stepper, ServoStepper)
     assert env.physics.stepper.model is env.physics.model.ptr
+
+
+def test_a_fixed_pose_in_the_holes_is_refused_with_bent_pins() -> None:
+    """A bent workpiece may not fit a pose below the top: such resets failed at random."""
+    with pytest.raises(ValueError, match=r"pose=.*defect_sigma.*z ≥ 0"):
+        dmc.load("circle2x1_defective", "insert", task_kwargs={"pose": [0, 0, 0, -0.5]})
+    env = dmc.load("circle2x1", "insert", task_kwargs={"pose": [0, 0, 0, -0.5]})
+    assert env.reset().observation["height"][0] == pytest.approx(-0.5, abs=0.5)
+
+
+def _physics_state(env) -> dict[str, np.ndarray]:
+    data = env.physics.data
+    return {name: getattr(data, name).copy() for name in ("qpos", "qvel", "act", "sensordata")}
+
+
+def test_a_failed_reset_changes_nothing_and_steps_raise_until_a_reset_succeeds() -> None:
+    """A pose out of the servo range set on the task: the reset used to redraw the
+    workpiece and rebuild the physics first, and the next step ran on that."""
+
+    def after_three_steps():
+        env = dmc.load("circle2x1_defective", "insert", task_kwargs={"random": 0})
+        env.reset()
+        for _ in range(3):
+            env.step(DOWN)
+        return env
+
+    env, reference = after_three_steps(), after_three_steps()
+    socket, model = env.task.socket, env.physics.model.ptr
+    physics, random = _physics_state(env), env.task.random.bit_generator.state
+    env.task.pose = [99.0, 0.0, 0.0, 10.0]
+    with pytest.raises(ValueError, match="pose"):
+        env.reset()
+    assert env.task.socket is socket and env.physics.model.ptr is model
+    assert env.task.random.bit_generator.state == random
+    for name, value in _physics_state(env).items():
+        assert np.array_equal(value, physics[name]), name
+    for _ in range(2):
+        with pytest.raises(gym.error.ResetNeeded):
+            env.step(DOWN)
+    env.task.pose = None
+    # The failed reset consumed nothing: the next episode is the reference's next one.
+    assert np.array_equal(_flat(env.reset().observation), _flat(reference.reset().observation))
+    assert env.task.socket == reference.task.socket
+    for _ in range(3):
+        assert np.array_equal(
+            _flat(env.step(DOWN).observation), _flat(reference.step(DOWN).observation)
+        )
 
 
 def test_named_indexing_and_the_shared_stepper() -> None:

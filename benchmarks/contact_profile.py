@@ -11,9 +11,11 @@ For each socket (2*2, 2*8, 2*20, square, hexagon) and regime (below) it runs ``-
 control steps through the env's own :class:`~tolins.envs.mujoco_backend.ServoStepper`
 from the regime's start pose and reports:
 
-* ``ms/step``: milliseconds per control step (250 physics steps), no instrumentation;
+* ``ms/step``: CPU milliseconds of the stepping thread per control step (250 physics
+  steps; ``time.thread_time``, which a busy machine disturbs less than the wall clock),
+  best of two uninstrumented runs;
 * the split of a physics step's time by MuJoCo's own timers (``data.timer``, read with
-  ``mjcb_time = time.perf_counter`` in a second, instrumented run): ``broad``
+  ``mjcb_time = time.thread_time`` in a third, instrumented run): ``broad``
   (``mjTIMER_COL_BROAD``), ``narrow`` (``mjTIMER_COL_NARROW``: midphase and narrowphase),
   ``make`` (``POS_MAKE`` + ``POS_PROJECT``: building the constraints), ``solver``
   (``mjTIMER_CONSTRAINT``), ``sensors`` (``FORWARD`` minus its timed stages) and ``rest``
@@ -92,12 +94,12 @@ def run(stepper: ServoStepper, case: Regime, steps: int, probe=None) -> float:
     """Seconds for ``steps`` control steps from ``case``'s pose; ``probe()`` after each."""
     stepper.reset(np.array(case.pose, dtype=float))
     action = np.array(case.action, dtype=float)
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     for _ in range(steps):
         stepper.step(action, SUBSTEPS)
         if probe is not None:
             probe()
-    return time.perf_counter() - t0
+    return time.thread_time() - t0
 
 
 def profile(
@@ -123,7 +125,7 @@ def profile(
             )
         )
 
-    mujoco.set_mjcb_time(time.perf_counter)
+    mujoco.set_mjcb_time(time.thread_time)
     if count_pairs:
         mujoco.set_mjcb_contactfilter(count)
     try:

@@ -37,8 +37,9 @@ What it measures, all in one run:
    ``old`` (sensors in every physics step, as before issue 19), ``new`` (today's default:
    sensors only in the physics step before each read) and ``pairs`` (new, on
    ``make_mjcf(socket, contact_pairs=True)``); the fastest block of each is kept.
-   ``new x`` and ``pairs x`` = old time / their time; ``same``: all three end at the same
-   state bit for bit (qpos, qvel, sensordata).
+   ``new x`` and ``pairs x`` = old time / their time (CPU time of the stepping thread,
+   which other load disturbs less than the wall clock); ``same``: all three end at the
+   same state bit for bit (qpos, qvel, sensordata).
 
 3. **Threads.** ``--envs`` environments (2*2 socket) stepped ``--thread-steps`` control
    steps each, round-robin, by one thread, then the same envs split into ``--threads``
@@ -345,13 +346,14 @@ def model_stepper(socket, contact_pairs: bool, lazy_sensors: bool) -> ServoStepp
 
 
 def run_stepper(stepper: ServoStepper, pose, action, steps: int) -> float:
-    """Seconds of ``steps`` control steps from a reset at ``pose`` (reset untimed)."""
+    """CPU seconds of this thread for ``steps`` control steps from a reset at ``pose``
+    (reset untimed; CPU time, which a busy machine disturbs less than the wall clock)."""
     stepper.reset(np.array(pose, dtype=float))
     action = np.array(action, dtype=float)
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     for _ in range(steps):
         stepper.step(action, 250)
-    return time.perf_counter() - t0
+    return time.thread_time() - t0
 
 
 def measure_models(

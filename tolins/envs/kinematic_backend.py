@@ -22,6 +22,14 @@ its motion; the rest of the step, the fraction ``1 - tau``, continues without th
   blocked horizontal motion and ``-1 N·mm`` against its rotation. An ascending step
   that leaves the hole after a wall contact ends at the contact's ``x, y, theta``.
 
+**Short pins** (``pin_shortenings``): pin ``i`` is inside the board when ``z + s_i < 0``
+(``s_i`` its shortening, :func:`~tolins.geometry.tolerance.pin_levels`) outside its hole.
+Only the full-length pins land on the top at ``z = 0``; a short pin outside its hole that
+reaches the top lower down is found by the wall search (it was already outside its hole
+before the contact, a wall contact's pin was inside) and stops the whole step there,
+``z`` at ``-s_i`` and ``x, y, theta`` at the contact (no sliding on the top with other
+pins down in their holes), with ``Fz = +1 N``.
+
 The workpiece stays in the servo range (:data:`~tolins.geometry.workspace.POSE_LOW` …
 ``POSE_HIGH``): a step that would leave it stops at its edge, as the MuJoCo joints do,
 with no contact force; the lower end of z is the carrier plate on the board's top.
@@ -42,7 +50,7 @@ import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.tolerance import contains
+from tolins.geometry.tolerance import contains, pin_levels, pins_inside_pose
 from tolins.geometry.validation import check_int, checked_array
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
 from tolins.mjcf import make_mjcf
@@ -67,8 +75,25 @@ class BatchState:
 
 def colliding(spec: SocketSpec, poses: np.ndarray) -> np.ndarray:
     """Whether each pose ``[..., 4]`` = ``[x, y, theta, z]`` has a pin inside the board."""
-    below = poses[..., 3] < 0.0
-    return below & ~contains(spec, poses[..., :3])
+    levels = pin_levels(spec)
+    if not levels.any():
+        below = poses[..., 3] < 0.0
+        return below & ~contains(spec, poses[..., :3])
+    return np.any(_stuck_pins(spec, poses, levels), axis=-1)
+
+
+def _stuck_pins(spec: SocketSpec, poses: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """``(..., n_pins)``: which pins of a spec with short pins are inside the board."""
+    below = poses[..., 3, None] + levels < 0.0
+    return below & ~pins_inside_pose(spec, poses[..., :3])
+
+
+def _landed(spec: SocketSpec, poses: np.ndarray) -> np.ndarray:
+    """Whether the full-length pins at ``poses`` ``[..., 3]`` on the top are outside a hole."""
+    levels = pin_levels(spec)
+    if not levels.any():
+        return ~contains(spec, poses)
+    return np.any(~pins_inside_pose(spec, poses) & (levels == 0.0), axis=-1)
 
 
 def kinematic_step(
@@ -92,7 +117,7 @@ def kinematic_step(
     # Landing: the pins reach the board's top outside the tolerance (z0 < 0: inside).
     # The top blocks z; x, y, theta slide on by the whole step (free at z = 0).
     landing = poses[rows, :3] + t_in[:, None] * delta[rows, :3]
-    landed = (z0 >= 0.0) & ~contains(spec, landing)
+    landed = (z0 >= 0.0) & _landed(spec, landing)
     new[rows[landed], 3] = 0.0
     wrench[rows[landed], 3] = CONTACT_FORCE
     collided[rows[landed]] = True
@@ -118,7 +143,35 @@ def kinematic_step(
     new[rows, :3] = start[:, :3] + lo[:, None] * step[:, :3]
     wrench[rows] = _wall_wrench(velocities[rows])
     collided[rows] = True
+    levels = pin_levels(spec)
+    if levels.any():
+        _short_pin_tops(
+            spec, new, wrench, rows, start + lo[:, None] * step, start + hi[:, None] * step
+        )
     return _in_range(new), wrench, collided
+
+
+def _short_pin_tops(
+    spec: SocketSpec,
+    new: np.ndarray,
+    wrench: np.ndarray,
+    rows: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
+) -> None:
+    """Contacts of short pins with the top (module docstring), in place: the pin stuck after
+    the contact was outside its hole before it. The step stops at the contact, ``z`` on
+    the highest such pin's level."""
+    levels = pin_levels(spec)
+    top = _stuck_pins(spec, after, levels) & ~pins_inside_pose(spec, before[:, :3])
+    hit = top.any(axis=1)
+    if not hit.any():
+        return
+    z = np.max(np.where(top[hit], -levels, -np.inf), axis=1)
+    new[rows[hit], :3] = before[hit, :3]
+    new[rows[hit], 3] = z
+    wrench[rows[hit]] = 0.0
+    wrench[rows[hit], 3] = CONTACT_FORCE
 
 
 def _in_range(poses: np.ndarray) -> np.ndarray:

@@ -1,4 +1,21 @@
-"""Random defects of a workpiece: bent pins."""
+"""Random defects of a workpiece: bent pins, pitch error, burred, short pins, a blocked hole.
+
+:func:`sample_defects` draws one kind (:data:`DEFECT_KINDS`) at a scale ``sigma``:
+
+* ``bent`` (the default; the paper's): offsets ``~ N(0, sigma² I)`` mm per pin, re-drawn
+  until every pin is in its cell (``pin_offsets``).
+* ``pitch``: the pins' column and row spacing scaled by ``1 + N(0, sigma²)`` each
+  (``sigma`` relative, e.g. 0.01 = 1 %), re-drawn until within ``MAX_PITCH_ERROR`` and
+  every pin in its cell (``pin_pitch_scale``).
+* ``burr``: each pin's radius grows by ``|N(0, sigma²)|`` mm, re-drawn until within
+  ``MAX_BURR`` and in its cell (``pin_burrs``).
+* ``short``: each pin is shortened by ``|N(0, sigma²)|`` mm, re-drawn until within
+  ``MAX_SHORTENING`` (``pin_shortenings``).
+* ``blocked``: one hole, drawn uniformly, is plugged (``blocked_holes``); ``sigma`` must
+  be ``None``.
+
+Each kind replaces its own field and keeps the others, so kinds compose.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +24,7 @@ import math
 
 import numpy as np
 
-from tolins.geometry.specs import CircularSocket
+from tolins.geometry.specs import MAX_BURR, MAX_PITCH_ERROR, MAX_SHORTENING, CircularSocket
 from tolins.geometry.validation import check_positive
 
 #: A bent-pin std is allowed when at least this share of its draws keep every pin in its
@@ -53,8 +70,16 @@ def check_defect_sigma(spec: CircularSocket, sigma: object, field: str = "sigma"
     return sigma
 
 
+#: The kinds of defect :func:`sample_defects` draws.
+DEFECT_KINDS = ("bent", "pitch", "burr", "short", "blocked")
+
+
 def sample_defects(
-    spec: CircularSocket, sigma: float, rng: np.random.Generator | int | None = None
+    spec: CircularSocket,
+    sigma: float | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    kind: str = "bent",
 ) -> CircularSocket:
     """Return a copy of ``spec`` whose pins are displaced by offsets drawn from N(0, sigma² I),
     re-drawn until every pin is in its cell.
@@ -65,8 +90,11 @@ def sample_defects(
     cell). A first draw that is valid is the result, so the same ``rng`` gives the same
     workpiece as a single draw did. ``sigma`` (mm) must pass :func:`check_defect_sigma`;
     any offsets ``spec`` already had are replaced; ``rng`` is a ``numpy.random.Generator``
-    or a seed for one.
+    or a seed for one. ``kind`` (:data:`DEFECT_KINDS`, module docstring) draws another kind
+    of defect at the scale ``sigma`` instead.
     """
+    if kind != "bent":
+        return _sample_kind(spec, sigma, rng, kind)
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r} cannot have bent pins; allowed: a CircularSocket")
     sigma = check_defect_sigma(spec, sigma)
@@ -77,3 +105,45 @@ def sample_defects(
         if not np.any(np.abs(offsets) > limit):
             return dataclasses.replace(spec, pin_offsets=offsets)
     raise RuntimeError(f"{MAX_DRAWS} draws of sigma={sigma!r} all moved a pin out of its cell")
+
+
+#: Per kind: the spec field it sets and the largest ``sigma`` (its field's own bound).
+_KIND_LIMITS = {"pitch": MAX_PITCH_ERROR, "burr": MAX_BURR, "short": MAX_SHORTENING}
+
+
+def _sample_kind(
+    spec: CircularSocket, sigma: object, rng: np.random.Generator | int | None, kind: str
+) -> CircularSocket:
+    """:func:`sample_defects` of a kind other than ``bent``."""
+    if kind not in DEFECT_KINDS:
+        raise ValueError(f"kind={kind!r} is unknown; allowed: {', '.join(DEFECT_KINDS)}")
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"spec={spec!r} cannot have {kind} defects; allowed: a CircularSocket")
+    rng = np.random.default_rng(rng)
+    if kind == "blocked":
+        if sigma is not None:
+            raise ValueError(f"sigma={sigma!r} is set for kind='blocked'; allowed: None")
+        hole = int(rng.integers(spec.n_pins))
+        return dataclasses.replace(spec, blocked_holes=(hole,))
+    sigma = check_positive("sigma", sigma, "mm" if kind != "pitch" else "(relative)")
+    limit = _KIND_LIMITS[kind]
+    if sigma > limit:
+        raise ValueError(f"sigma={sigma!r} is too large for kind={kind!r}; allowed: ≤ {limit}")
+    for _ in range(MAX_DRAWS):
+        if kind == "pitch":
+            scale = 1.0 + rng.normal(0.0, sigma, size=2)
+            values = {"pin_pitch_scale": tuple(scale)} if np.all(abs(scale - 1) <= limit) else None
+        else:
+            draw = np.abs(rng.normal(0.0, sigma, size=spec.n_pins))
+            field = "pin_burrs" if kind == "burr" else "pin_shortenings"
+            values = {field: tuple(draw)} if np.all(draw <= limit) else None
+        if values is None:
+            continue
+        try:
+            return dataclasses.replace(spec, **values)
+        except ValueError:
+            continue  # a pin out of its cell: draw again
+    raise RuntimeError(
+        f"{MAX_DRAWS} draws of kind={kind!r}, sigma={sigma!r} all left the allowed range or "
+        "moved a pin out of its cell; choose a smaller sigma"
+    )

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tolins.geometry.validation import check_int, check_positive
+from tolins.geometry.validation import check_int, check_positive, checked_array
 
 #: Thinnest board wall (mm) allowed between two neighbouring holes.
 MIN_WALL = 0.2
@@ -30,6 +30,13 @@ MAX_SIDES = 64
 #: Largest bend of a pin (mm) along an axis with a single hole (along an axis with more,
 #: its cell bounds it): ten times the clearance of the paper's sockets.
 MAX_PIN_OFFSET = 2.0
+#: Largest relative pitch error of a workpiece: its pins' spacing is the holes' times a
+#: scale in ``[1 - MAX_PITCH_ERROR, 1 + MAX_PITCH_ERROR]`` (and every pin in its cell).
+MAX_PITCH_ERROR = 0.1
+#: Largest burr (mm) of a pin: its radius grows by at most this (and it stays in its cell).
+MAX_BURR = 0.5
+#: Largest shortening (mm) of a pin: half the pins' length (``workspace.PIN_LENGTH``).
+MAX_SHORTENING = 2.0
 
 
 def polygon_vertices(sides: int, circumradius: float) -> np.ndarray:
@@ -58,6 +65,21 @@ class CircularSocket:
             displacement in mm from its nominal place (the holes stay nominal).
             ``None`` means a nominal workpiece. Stored as a tuple of ``(dx, dy)`` pairs
             so that specs are hashable; use :attr:`offsets` for the array.
+        pin_pitch_scale: Pitch error: ``(col_scale, row_scale)``, the pins' column and row
+            spacing as a multiple of the holes' (each within ``1 ± MAX_PITCH_ERROR``): pin
+            ``i`` sits at ``h_i * scale + offset_i``. ``None``: no pitch error.
+        pin_burrs: Oversized (burred) pins: per pin, mm ``≥ 0`` added to its radius (at most
+            :data:`MAX_BURR`); a pin whose radius reaches the hole's never goes in.
+            ``None``: none.
+        pin_shortenings: Short pins: per pin, mm ``≥ 0`` (at most :data:`MAX_SHORTENING`)
+            missing at its tip, so it meets the board that much later (lower); the pose's
+            ``z`` stays the height of a full-length pin's tip. ``None``: none.
+        blocked_holes: Blocked holes: the sorted indices of holes with a plug in them; a
+            workpiece with one is never insertable. ``()``: none.
+
+    Every pin (pitch error and bend included, at its burred radius) must stay in its cell:
+    ``|pin_i - h_i| ≤ pitch / 2 - (pin_radius + burr_i)`` along an axis with more than one
+    hole, ``≤ MAX_PIN_OFFSET`` along one with a single hole.
     """
 
     rows: int
@@ -67,6 +89,10 @@ class CircularSocket:
     row_pitch: float = 7.62
     col_pitch: float = 2.54
     pin_offsets: tuple[tuple[float, float], ...] | None = field(default=None)
+    pin_pitch_scale: tuple[float, float] | None = None
+    pin_burrs: tuple[float, ...] | None = None
+    pin_shortenings: tuple[float, ...] | None = None
+    blocked_holes: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -93,7 +119,66 @@ class CircularSocket:
                     f"{self.hole_radius!r}; allowed: {name} ≥ {wall_span:.4g} mm "
                     f"(two hole circumradii plus a {MIN_WALL} mm wall)"
                 )
+        set_(self, "pin_pitch_scale", self._validated_pitch(self.pin_pitch_scale))
+        for name, limit in (("pin_burrs", MAX_BURR), ("pin_shortenings", MAX_SHORTENING)):
+            set_(self, name, self._validated_per_pin(name, getattr(self, name), limit))
+        set_(self, "blocked_holes", self._validated_blocked(self.blocked_holes))
         set_(self, "pin_offsets", self._validated_offsets(self.pin_offsets))
+        self._check_cells()
+
+    def _validated_pitch(self, scale: object) -> tuple[float, float] | None:
+        if scale is None:
+            return None
+        allowed = (
+            f"None or (col_scale, row_scale), each within 1 ± {MAX_PITCH_ERROR} "
+            "(the pins' spacing over the holes')"
+        )
+        array = checked_array("pin_pitch_scale", scale, (2,), allowed)
+        if np.any(np.abs(array - 1.0) > MAX_PITCH_ERROR):
+            raise ValueError(
+                f"pin_pitch_scale={array.tolist()!r} is out of range; allowed: {allowed}"
+            )
+        return (float(array[0]), float(array[1]))
+
+    def _validated_per_pin(
+        self, name: str, values: object, limit: float
+    ) -> tuple[float, ...] | None:
+        if values is None:
+            return None
+        allowed = f"None or {self.n_pins} values in [0, {limit}] mm, one per pin"
+        array = checked_array(name, values, (self.n_pins,), allowed)
+        if np.any(array < 0) or np.any(array > limit):
+            raise ValueError(f"{name}={array.tolist()!r} is out of range; allowed: {allowed}")
+        return tuple(float(v) for v in array)
+
+    def _validated_blocked(self, holes: object) -> tuple[int, ...]:
+        allowed = f"a tuple of distinct hole indices 0 … {self.n_pins - 1}"
+        if not isinstance(holes, (tuple, list)):
+            raise ValueError(f"blocked_holes={holes!r} is not a tuple; allowed: {allowed}")
+        indices = [
+            check_int("blocked_holes[]", h, minimum=0, maximum=self.n_pins - 1) for h in holes
+        ]
+        if len(set(indices)) != len(indices):
+            raise ValueError(f"blocked_holes={holes!r} repeats a hole; allowed: {allowed}")
+        return tuple(sorted(indices))
+
+    def _check_cells(self) -> None:
+        """Every pin, at its burred radius, where pitch error and bend put it, in its cell."""
+        if self.pin_pitch_scale is None and self.pin_burrs is None:
+            return  # _validated_offsets has checked the bends against offset_limit
+        displacement = np.abs(self.pin_centers - self.hole_centers)
+        burrs = self.burrs[:, None]
+        limit = self.offset_limit
+        multi = np.array([self.cols > 1, self.rows > 1])
+        outside = np.any(displacement > limit - np.where(multi, burrs, 0.0) + 1e-12, axis=1)
+        if np.any(outside):
+            pin = int(np.argmax(outside))
+            raise ValueError(
+                f"pin {pin} (pitch scale {self.pin_pitch_scale!r}, offset "
+                f"{self.offsets[pin].tolist()!r}, burr {float(self.burrs[pin])!r}) reaches out "
+                "of its cell; allowed: |pin - hole| ≤ pitch / 2 - (pin_radius + burr) along "
+                f"an axis with several holes, ≤ {MAX_PIN_OFFSET} mm along one with a single hole"
+            )
 
     def _validated_offsets(self, offsets: object) -> tuple[tuple[float, float], ...] | None:
         if offsets is None:
@@ -134,12 +219,44 @@ class CircularSocket:
 
     @property
     def is_defective(self) -> bool:
-        return self.pin_offsets is not None and any(dx or dy for dx, dy in self.pin_offsets)
+        bent = self.pin_offsets is not None and any(dx or dy for dx, dy in self.pin_offsets)
+        pitch = self.pin_pitch_scale is not None and self.pin_pitch_scale != (1.0, 1.0)
+        burred = self.pin_burrs is not None and any(self.pin_burrs)
+        short = self.pin_shortenings is not None and any(self.pin_shortenings)
+        return bent or pitch or burred or short or bool(self.blocked_holes)
 
     @property
     def pin_reach(self) -> float:
-        """Radius of the smallest circle about a pin's centre that holds the pin (mm)."""
-        return self.pin_radius
+        """Radius of the smallest circle about a pin's centre that holds the pin (mm): the
+        largest burred radius."""
+        if self.pin_burrs is None:
+            return self.pin_radius
+        return self.pin_radius + max(self.pin_burrs)
+
+    @property
+    def burrs(self) -> np.ndarray:
+        """Each pin's burr ``(n_pins,)`` in mm (zeros without)."""
+        return np.zeros(self.n_pins) if self.pin_burrs is None else np.array(self.pin_burrs)
+
+    @property
+    def shortenings(self) -> np.ndarray:
+        """Each pin's shortening ``(n_pins,)`` in mm (zeros without)."""
+        if self.pin_shortenings is None:
+            return np.zeros(self.n_pins)
+        return np.array(self.pin_shortenings)
+
+    @property
+    def pin_radii(self) -> np.ndarray:
+        """Each pin's radius ``(n_pins,)`` in mm, burrs included."""
+        return self.pin_radius + self.burrs
+
+    @property
+    def pin_clearances(self) -> np.ndarray:
+        """Each pin's radial clearance in its hole ``(n_pins,)`` (mm): ``hole_radius -
+        pin_radius - burr``; ``-inf`` for a blocked hole. A pin fits only where it is ≥ 0."""
+        clearances = self.hole_radius - self.pin_radii
+        clearances[list(self.blocked_holes)] = -np.inf
+        return clearances
 
     @property
     def offset_limit(self) -> np.ndarray:
@@ -174,9 +291,17 @@ class CircularSocket:
         return np.stack([x, y], axis=1).astype(float)
 
     @property
+    def nominal_pin_centers(self) -> np.ndarray:
+        """Pin centres ``(n_pins, 2)`` before bends: the hole centres, pitch error included."""
+        if self.pin_pitch_scale is None:
+            return self.hole_centers
+        return self.hole_centers * np.array(self.pin_pitch_scale)
+
+    @property
     def pin_centers(self) -> np.ndarray:
-        """Actual pin centres ``(n_pins, 2)`` in the workpiece frame, offsets included."""
-        return self.hole_centers + self.offsets
+        """Actual pin centres ``(n_pins, 2)`` in the workpiece frame, pitch error and
+        offsets included."""
+        return self.nominal_pin_centers + self.offsets
 
     @property
     def clearance(self) -> float:

@@ -4,9 +4,13 @@ A pose moves each pin rigidly: rotation by ``theta`` about the board origin, the
 translation by ``(x, y)`` (mm, rad). Holes are nominal; pins carry the spec's
 ``pin_offsets``. The tolerance is a closed set: a pin touching its hole's wall is inside.
 
-* Circles: pin ``i`` (centre ``p_i``, offsets included) is inside hole ``h_i`` iff
-  ``|R(theta) p_i + (x, y) - h_i| <= hole_radius - pin_radius`` (exact circles, not the
-  16-gons of the MuJoCo model).
+* Circles: pin ``i`` (centre ``p_i``, pitch error and offsets included) is inside hole
+  ``h_i`` iff ``|R(theta) p_i + (x, y) - h_i| <= c_i``, ``c_i = hole_radius - pin_radius
+  - burr_i`` (exact circles, not the 16-gons of the MuJoCo model); a pin with ``c_i < 0``
+  (burred beyond its hole) or in a blocked hole is never inside
+  (:attr:`~tolins.geometry.specs.CircularSocket.pin_clearances`). Short pins do not
+  change the tolerance (a short pin must still be in its hole): they change only the
+  height at which a pin meets the board (:func:`pin_levels`).
 * Polygons: the peg is inside iff each of its vertices is behind each face of the hole.
   For two regular n-gons with a face normal along +x this reads
   ``max_k n_k·(x, y) <= r_hole - R_pin cos((theta mod 2π/n) - π/n)``, with face normals
@@ -102,7 +106,7 @@ def _circle_contains(
     spec: CircularSocket, x: np.ndarray, y: np.ndarray, theta: np.ndarray
 ) -> np.ndarray:
     """``|R(theta) p_i + (x, y) - h_i| <= clearance`` for all pins, as one matrix product."""
-    _, _, clearance = _circle_geometry(spec)
+    _, _, clearance2 = _circle_geometry(spec)
     basis, offset = _circle_basis(spec)
     terms = np.empty((*x.shape, 4))
     terms[..., 0], terms[..., 1], terms[..., 2], terms[..., 3] = np.cos(theta), np.sin(theta), x, y
@@ -111,7 +115,7 @@ def _circle_contains(
     gap += offset
     gap *= gap
     n = spec.n_pins
-    return np.all(gap[..., :n] + gap[..., n:] <= clearance * clearance, axis=-1)
+    return np.all(gap[..., :n] + gap[..., n:] <= clearance2, axis=-1)
 
 
 def image(
@@ -147,11 +151,11 @@ def extents(spec: SocketSpec) -> Extents:
 def _line_extent(spec: SocketSpec, axis: int) -> tuple[float, float]:
     """Interval of the coordinate ``axis`` (0: x, 1: y) with the other two at 0."""
     if isinstance(spec, CircularSocket):
-        pins, holes, clearance = _circle_geometry(spec)
+        pins, holes, clearance2 = _circle_geometry(spec)
         along, across = (pins - holes)[:, axis], (pins - holes)[:, 1 - axis]
-        if np.any(across * across > clearance * clearance):
+        if np.any(across * across > clearance2):
             return (math.nan, math.nan)
-        half = np.sqrt(clearance * clearance - across * across)
+        half = np.sqrt(clearance2 - across * across)
         low, high = float(np.max(-along - half)), float(np.min(-along + half))
         return (low, high) if low <= high else (math.nan, math.nan)
     normals, hole_inradius = _polygon_geometry(spec)
@@ -166,14 +170,14 @@ def _theta_reach(spec: SocketSpec, x: np.ndarray, y: np.ndarray, sign: float) ->
     ``inf`` where it never leaves the tolerance, NaN where ``[x, y, 0]`` is outside.
     """
     if isinstance(spec, CircularSocket):
-        pins, holes, clearance = _circle_geometry(spec)
+        pins, holes, clearance2 = _circle_geometry(spec)
         qx, qy = x[:, None] - holes[:, 0], y[:, None] - holes[:, 1]
         pin_norm = np.hypot(pins[:, 0], pins[:, 1])
         q_norm2 = qx * qx + qy * qy
         # |R p + q|² = |p|² + |q|² + 2 |p| |q| cos(theta + angle(p) - angle(q)) <= c²
         a = 2 * pin_norm * np.sqrt(q_norm2)
         beta = np.arctan2(pins[:, 1], pins[:, 0]) - np.arctan2(qy, qx)
-        b = clearance * clearance - pin_norm * pin_norm - q_norm2
+        b = clearance2 - pin_norm * pin_norm - q_norm2
         # np.min propagates NaN: one pin outside its hole puts the pose outside.
         return np.min(_arc_reach(a, sign * beta, b), axis=1)
     normals, hole_inradius = _polygon_geometry(spec)
@@ -201,7 +205,9 @@ def pins_inside(spec: CircularSocket, offsets: object, poses: object) -> np.ndar
 
     ``offsets`` ``[..., n_pins, 2]`` replaces the spec's own pin offsets (mm); ``poses``
     ``[..., 3]`` are ``[x, y, theta]``; the two leading shapes broadcast. Pin ``i`` is in
-    iff ``|R(theta) (h_i + eps_i) + (x, y) - h_i| <= hole_radius - pin_radius``. Returns a
+    iff ``|R(theta) (n_i + eps_i) + (x, y) - h_i| <= c_i`` (``n_i``: the pin's place
+    before bends, pitch error included; ``c_i``: its clearance, burrs and blocked holes
+    included, as :func:`contains`). Returns a
     bool array ``broadcast(offsets.shape[:-2], poses.shape[:-1]) + (n_pins,)``;
     ``pins_inside(...).all(-1)`` is :func:`contains` of each offset workpiece.
     """
@@ -211,19 +217,45 @@ def pins_inside(spec: CircularSocket, offsets: object, poses: object) -> np.ndar
 def pin_gaps(spec: CircularSocket, offsets: object, poses: object) -> np.ndarray:
     """Each pin's centre minus its hole's centre ``(..., n_pins, 2)`` (mm), as :func:`pins_inside`.
 
-    The gap of pin ``i`` is ``R(theta) (h_i + eps_i) + (x, y) - h_i``; the pin is in its hole
-    iff the gap's length is at most the clearance, and a blocked pin rests on the board on
-    the side the gap points to.
+    The gap of pin ``i`` is ``R(theta) (n_i + eps_i) + (x, y) - h_i`` (``n_i``: the hole
+    centre, scaled by any pitch error); the pin is in its hole iff the gap's length is at
+    most its clearance (:func:`gaps_inside`), and a blocked pin rests on the board on the
+    side the gap points to.
     """
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
     array = _checked_poses(poses)
-    return _pin_gaps(spec.hole_centers, _checked_offsets(spec, offsets), array)
+    eps = _checked_offsets(spec, offsets)
+    if spec.pin_pitch_scale is None:
+        return _pin_gaps(spec.hole_centers, eps, array)
+    return moved_pins(spec.nominal_pin_centers + eps, array) - spec.hole_centers
 
 
 def gaps_inside(spec: CircularSocket, gaps: np.ndarray) -> np.ndarray:
-    """Whether each pin with gap ``gaps`` ``(..., 2)`` (:func:`pin_gaps`) is in its hole."""
-    return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
+    """Whether each pin with gap ``gaps`` ``(..., n_pins, 2)`` (:func:`pin_gaps`) is in its
+    hole (within its own clearance; never in a blocked hole)."""
+    if spec.pin_burrs is None and not spec.blocked_holes:
+        return np.sum(gaps * gaps, axis=-1) <= spec.clearance * spec.clearance
+    return np.sum(gaps * gaps, axis=-1) <= _circle_geometry(spec)[2]
+
+
+def pin_levels(spec: SocketSpec) -> np.ndarray:
+    """Height ``(n_pins,)`` (mm) of each pin's tip over a full-length pin's tip: its
+    shortening (zeros for a polygon peg). Pin ``i`` meets the board's top when the pose's
+    ``z = -level_i``."""
+    if isinstance(spec, CircularSocket):
+        return spec.shortenings
+    return np.zeros(1)
+
+
+def pins_inside_pose(spec: SocketSpec, poses: object) -> np.ndarray:
+    """Whether each pin is in its hole at each pose ``[..., 3]``: ``(..., n_pins)`` bools;
+    ``.all(-1)`` is :func:`contains`."""
+    _check_spec(spec)
+    array = _checked_poses(poses)
+    if isinstance(spec, CircularSocket):
+        return gaps_inside(spec, pin_gaps(spec, spec.offsets, array))
+    return contains(spec, array)[..., None]
 
 
 def moved_pins(pins: np.ndarray, poses: np.ndarray) -> np.ndarray:
@@ -250,12 +282,16 @@ def _checked_offsets(spec: CircularSocket, offsets: object) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=256)
-def _circle_geometry(spec: CircularSocket) -> tuple[np.ndarray, np.ndarray, float]:
-    """Pin centres (offsets included), hole centres and radial clearance, read-only."""
+def _circle_geometry(spec: CircularSocket) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pin centres (offsets included), hole centres and each pin's squared radial clearance
+    ``(n_pins,)``, ``-1`` where the pin never fits (burred beyond its hole, or blocked);
+    read-only."""
     pins, holes = spec.pin_centers, spec.hole_centers
-    pins.setflags(write=False)
-    holes.setflags(write=False)
-    return pins, holes, spec.hole_radius - spec.pin_radius
+    clearances = spec.pin_clearances
+    clearance2 = np.where(clearances >= 0, clearances * clearances, -1.0)
+    for array in (pins, holes, clearance2):
+        array.setflags(write=False)
+    return pins, holes, clearance2
 
 
 @functools.lru_cache(maxsize=256)

@@ -53,9 +53,12 @@ def in_holes(spec: SocketSpec, poses: object, depth: float) -> np.ndarray:
 
     Pin ``i`` is in when the pin tips are at ``z ≤ -depth`` and its axis lies within the
     circumradius of hole ``i`` (holes are further apart than two circumradii, so no pin
-    can count in another's hole, nor beside the board). ``poses`` ``[..., 4]``.
+    can count in another's hole, nor beside the board). ``poses`` ``[..., 4]``. Never with a
+    blocked hole (``blocked_holes``).
     """
     poses = np.asarray(poses, dtype=float)
+    if getattr(spec, "blocked_holes", ()):
+        return np.zeros(poses.shape[:-1], dtype=bool)
     offsets = pin_axes(spec, poses) - spec.hole_centers
     inside = np.sum(offsets * offsets, axis=-1) <= spec.hole_circumradius**2
     return (poses[..., 3] <= -depth) & np.all(inside, axis=-1)

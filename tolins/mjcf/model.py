@@ -6,7 +6,8 @@ Model units: lengths in mm, so forces are in mN (kg·mm/s²) and torques in
 Elements (every one named):
 
 * ``board``: a static body of convex pieces: ``hole{h}_wall{k}`` prisms (meshes
-  ``wall{k}``) around each hole and ``board_box{i}`` boxes elsewhere. Top at z = 0.
+  ``wall{k}``) around each hole and ``board_box{i}`` boxes elsewhere, then a ``plug{h}``
+  box filling each blocked hole ``h`` (flush with the top). Top at z = 0.
 * ``workpiece``: the carriage, on joints ``x``, ``y``, ``z`` (slides) and ``theta``
   (hinge about z), driven by ``intvelocity`` servos ``ux``, ``uy``, ``uz``,
   ``utheta`` (control = velocity in mm/s or rad/s) with bounded force. The joints'
@@ -138,8 +139,24 @@ def _board_xml(spec: SocketSpec) -> tuple[list[str], list[str]]:
             f'pos="{nums((*center, -BOARD_THICKNESS / 2))}" '
             f'size="{nums((*half, BOARD_THICKNESS / 2))}"/>'
         )
+    body += [
+        f'<geom name="plug{h}" class="board" type="box" '
+        f'pos="{nums((*center, -BOARD_THICKNESS / 2))}" '
+        f'size="{nums((*half, BOARD_THICKNESS / 2))}"/>'
+        for h, center, half in _plugs(spec)
+    ]
     body.append("</body>")
     return assets, body
+
+
+def _plugs(spec: SocketSpec) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """``(hole, center_xy, half_size_xy)`` of the box plugging each blocked hole: a square
+    of half-width ``hole_radius``, which covers the hole's 16-gon (its vertices nearest an
+    axis lie on the square) and stays inside its cell."""
+    if not isinstance(spec, CircularSocket) or not spec.blocked_holes:
+        return []
+    half = np.full(2, spec.hole_radius)
+    return [(h, spec.hole_centers[h], half) for h in spec.blocked_holes]
 
 
 def _board_pieces(spec: SocketSpec) -> list[tuple[str, str, np.ndarray]]:
@@ -153,6 +170,8 @@ def _board_pieces(spec: SocketSpec) -> list[tuple[str, str, np.ndarray]]:
     ]
     for i, (center, half) in enumerate(board_filler_boxes(spec)):
         pieces.append((f"board_box{i}", "box", np.array([center - half, center + half])))
+    for h, center, half in _plugs(spec):
+        pieces.append((f"plug{h}", "box", np.array([center - half, center + half])))
     return pieces
 
 
@@ -177,10 +196,13 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
     """Mesh assets and geoms of the pins, tips at z = 0 of the workpiece frame."""
     half = PIN_LENGTH / 2
     if isinstance(spec, CircularSocket):
+        # A short pin lacks its tip: it spans z = shortening … PIN_LENGTH.
+        levels = spec.shortenings
         geoms = [
-            f'<geom name="pin{i}" class="pin" type="cylinder" pos="{nums((x, y, half))}" '
-            f'size="{nums((spec.pin_radius, half))}"/>'
-            for i, (x, y) in enumerate(spec.pin_centers)
+            f'<geom name="pin{i}" class="pin" type="cylinder" '
+            f'pos="{nums((x, y, half + levels[i] / 2))}" '
+            f'size="{nums((radius, half - levels[i] / 2))}"/>'
+            for i, ((x, y), radius) in enumerate(zip(spec.pin_centers, spec.pin_radii, strict=True))
         ]
         return [], geoms
     if spec.sides == 4:
@@ -206,8 +228,9 @@ def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
     )  # zones of neighbouring pins never overlap
     zone = nums((reach, reach, PIN_LENGTH / 2 + 0.2))
     sites, sensors = [], []
+    levels = spec.shortenings if isinstance(spec, CircularSocket) else np.zeros(1)
     for i, (x, y) in enumerate(spec.pin_centers):
-        sites.append(f'<site name="pin{i}_tip" pos="{nums((x, y, 0.0))}" size="0.05"/>')
+        sites.append(f'<site name="pin{i}_tip" pos="{nums((x, y, levels[i]))}" size="0.05"/>')
         sites.append(
             f'<site name="pin{i}_zone" type="box" pos="{nums((x, y, PIN_LENGTH / 2))}" '
             f'size="{zone}" rgba="0 0 0 0"/>'

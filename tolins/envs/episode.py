@@ -46,9 +46,10 @@ _A_MIN = -A_MAX
 #: Longest control period (s): four times the paper's.
 MAX_CONTROL_DT = 1.0
 #: Shortest control period (s): two physics steps. The servos are re-anchored at the start
-#: of every control step and push only from the second physics step on, so in one step
-#: the workpiece cannot move; they cover about ``1 - 4.7 ms / control_dt`` of the commanded
-#: motion (measured: 10 % at 2 ms, 55 % at 10 ms, 98 % at the paper's 0.25 s).
+#: of every control step and push only from the second physics step on, so in one step the
+#: workpiece cannot move. Of the commanded motion they cover 10 % at 2 ms, 55 % at 10 ms
+#: and 98 % at 0.25 s (about ``1 - 4.7 ms / control_dt`` from 10 ms on;
+#: benchmarks/servo_tracking.py).
 MIN_PHYSICS_STEPS = 2
 MIN_CONTROL_DT = MIN_PHYSICS_STEPS * TIMESTEP
 #: Largest noise std of any measured quantity (mm, rad, N, N·mm): far beyond any sensor,

@@ -28,6 +28,9 @@ def _policies(n: int, rng: np.random.Generator):
 def _assert_info_row(vector_info: dict, i: int, info: dict) -> None:
     for key, value in info.items():
         assert vector_info[f"_{key}"][i], key
+        if isinstance(value, dict):  # batched key by key (info["workpiece"])
+            _assert_info_row(vector_info[key], i, value)
+            continue
         assert np.array_equal(np.asarray(vector_info[key][i]), np.asarray(value)), key
     extra = [k for k in vector_info if not k.startswith("_") and vector_info[f"_{k}"][i]]
     assert set(extra) == set(info), (extra, sorted(info))

@@ -22,7 +22,7 @@ import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.envs.episode import NO_SCORE, EpisodeScore, StepScore, TaskSettings
-from tolins.geometry.specs import SocketSpec
+from tolins.geometry.specs import SocketSpec, workpiece_dict
 from tolins.geometry.workspace import check_goal, check_pose
 
 #: The keys ``reset(options=...)`` accepts; each applies to that reset's episode only.
@@ -100,12 +100,16 @@ class EpisodeState:
         self, plan: ResetPlan, state: BackendState, rng: np.random.Generator
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Start the planned episode from the backend's ``state``: the first observation
-        and info."""
+        and info (with ``info["workpiece"]``, the episode's socket as
+        :func:`~tolins.geometry.specs.workpiece_dict`: its defects' ground truth)."""
         self.socket, self.episode_goal = plan.socket, plan.goal
         self.state, self.broken = state, False
         self.score.reset()
         self.observation = self.settings.observe(state, self.episode_goal, rng)
-        return self.observation.copy(), self.info(NO_SCORE)
+        return self.observation.copy(), {
+            **self.info(NO_SCORE),
+            "workpiece": workpiece_dict(plan.socket),
+        }
 
     def check_running(self) -> None:
         """``gymnasium.error.ResetNeeded`` unless an episode is running."""

@@ -12,6 +12,7 @@ Conventions (shared by every part of tolins):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -134,7 +135,7 @@ class CircularSocket:
             "(the pins' spacing over the holes')"
         )
         array = checked_array("pin_pitch_scale", scale, (2,), allowed)
-        if np.any(np.abs(array - 1.0) > MAX_PITCH_ERROR):
+        if np.any(np.abs(array - 1.0) > MAX_PITCH_ERROR + 1e-12):
             raise ValueError(
                 f"pin_pitch_scale={array.tolist()!r} is out of range; allowed: {allowed}"
             )
@@ -375,3 +376,19 @@ class PolygonSocket:
 
 
 SocketSpec = CircularSocket | PolygonSocket
+
+
+def workpiece_dict(spec: SocketSpec) -> dict[str, object]:
+    """``spec`` as JSON-ready data, the ground truth of an episode's workpiece:
+    ``{"type": "CircularSocket", "rows": 2, ..., "pin_offsets": [[dx, dy], ...] or None,
+    "pin_pitch_scale": ..., "pin_burrs": ..., "pin_shortenings": ..., "blocked_holes":
+    [...], "defective": bool}`` (tuples as lists; ``type(spec)(**fields)`` of every key but
+    ``type`` and ``defective`` rebuilds it)."""
+    fields: dict[str, object] = {"type": type(spec).__name__}
+    for item in dataclasses.fields(spec):
+        value = getattr(spec, item.name)
+        if isinstance(value, tuple):
+            value = [list(v) if isinstance(v, tuple) else v for v in value]
+        fields[item.name] = value
+    fields["defective"] = spec.is_defective
+    return fields

@@ -64,7 +64,6 @@ class EpisodeState:
         self.settings = settings
         self.goal = goal
         self.socket = settings.socket
-        self.episode_goal = self.goal
         self.score = EpisodeScore(settings)
         self.state: BackendState | None = None
         self.observation = np.zeros(8)
@@ -72,12 +71,15 @@ class EpisodeState:
 
     @property
     def goal(self) -> np.ndarray:
-        """The goal of later episodes (mm, rad); a goal given in ``options`` is for one."""
-        return self._goal.copy()
+        """The goal ``[x*, y*, theta*]`` (mm, rad) the observation is measured from now."""
+        return self.episode_goal.copy()
 
     @goal.setter
     def goal(self, value: Any) -> None:
+        """Move the goal of the running episode and of every later one whose reset names
+        none (a goal in ``reset(options=...)`` is for that episode only)."""
         self._goal = check_goal(value)
+        self.episode_goal = self._goal
 
     def plan(self, rng: np.random.Generator, options: dict[str, Any] | None) -> ResetPlan:
         """Validate ``options`` and draw the next episode's workpiece and initial pose (in

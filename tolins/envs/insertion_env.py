@@ -113,7 +113,8 @@ class InsertionEnv(gym.Env):
     (see :class:`InitialPoseDistribution`) around the goal, or takes
     ``options={"pose": [x, y, theta, z]}``; ``options={"goal": [x*, y*, θ*]}`` moves
     the goal of that episode only (gymnasium's convention: options apply to one reset;
-    ``env.goal = ...`` sets the goal of every later episode). With ``defect_sigma``,
+    ``env.goal = ...`` moves it for the running episode and the later ones). With
+    ``defect_sigma``,
     every reset draws a new bent-pin workpiece (per-pin offsets ~ N(0, sigma² I), mm)
     from the nominal circular ``socket``. ``reset`` validates every option before it
     changes anything: a failed reset raises ``ValueError``, leaves the episode as it
@@ -195,7 +196,8 @@ class InsertionEnv(gym.Env):
 
     @property
     def goal(self) -> np.ndarray:
-        """The goal ``[x*, y*, theta*]`` (mm, rad) of the episodes whose reset names none."""
+        """The goal ``[x*, y*, theta*]`` (mm, rad) the observation is measured from; setting
+        it moves the running episode's goal and that of every later reset naming none."""
         return self._episode.goal
 
     @goal.setter

@@ -81,6 +81,33 @@ def simulation_fault(
     return None
 
 
+def pin_touch_points(
+    model: mujoco.MjModel, data: mujoco.MjData, pin_geoms: dict[int, int]
+) -> np.ndarray:
+    """Where each pin presses on the board in ``data``: ``(n_pins, 2)`` world ``(x, y)`` (mm),
+    the normal-force-weighted mean of its contact points; NaN for a pin without contact
+    force. ``pin_geoms``: pin index by geom id."""
+    n_pins = len(pin_geoms)
+    weighted, total = np.zeros((n_pins, 2)), np.zeros(n_pins)
+    force = np.zeros(6)
+    for k in range(data.ncon):
+        contact = data.contact[k]
+        pin = pin_geoms.get(contact.geom1, pin_geoms.get(contact.geom2))
+        if pin is None:
+            continue
+        mujoco.mj_contactForce(model, data, k, force)
+        weighted[pin] += force[0] * contact.pos[:2]
+        total[pin] += force[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(total[:, None] > 0, weighted / total[:, None], np.nan)
+
+
+def pin_geom_ids(model: mujoco.MjModel) -> dict[int, int]:
+    """Pin index by geom id of a model made by :func:`tolins.make_mjcf`."""
+    _, n_pins = _touch_sensors(model)
+    return {model.geom(f"pin{i}").id: i for i in range(n_pins)}
+
+
 class ServoStepper:
     """The control step of a socket model, on a ``MjModel``/``MjData`` pair it does not own.
 
@@ -119,7 +146,7 @@ class ServoStepper:
         self._touch = data.sensordata[touch : touch + n_pins]
         self._wrench = data.sensordata[self._force : self._force + 3]
         self._warnings = data.warning.number
-        self._pin_geoms = {model.geom(f"pin{i}").id: i for i in range(n_pins)}
+        self._pin_geoms = pin_geom_ids(model)
 
     #: Attributes that view MjData's buffers: pickled, they would become frozen copies.
     _VIEWS = ("_touch", "_wrench", "_warnings")
@@ -150,25 +177,8 @@ class ServoStepper:
         return self._touch * _FORCE_SCALE
 
     def pin_touch_points(self) -> np.ndarray:
-        """Where each pin presses on the board now: ``(n_pins, 2)`` world ``(x, y)`` (mm).
-
-        The normal-force-weighted mean of the pin's contact points; NaN for a pin without
-        contact force.
-        """
-        m, d = self.model, self.data
-        n_pins = len(self._pin_geoms)
-        weighted, total = np.zeros((n_pins, 2)), np.zeros(n_pins)
-        force = np.zeros(6)
-        for k in range(d.ncon):
-            contact = d.contact[k]
-            pin = self._pin_geoms.get(contact.geom1, self._pin_geoms.get(contact.geom2))
-            if pin is None:
-                continue
-            mujoco.mj_contactForce(m, d, k, force)
-            weighted[pin] += force[0] * contact.pos[:2]
-            total[pin] += force[0]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total[:, None] > 0, weighted / total[:, None], np.nan)
+        """Where each pin presses on the board now (see :func:`pin_touch_points`)."""
+        return pin_touch_points(self.model, self.data, self._pin_geoms)
 
     def reset(self, pose: np.ndarray) -> BackendState:
         """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""

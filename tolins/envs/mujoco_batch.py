@@ -31,6 +31,8 @@ from tolins.envs.mujoco_backend import (
     board_wrench,
     default_contact_checks,
     physics_steps,
+    pin_geom_ids,
+    pin_touch_points,
     simulation_fault,
 )
 from tolins.geometry.specs import SocketSpec
@@ -64,6 +66,8 @@ class MujocoBatch:
         control_dt: Control period (s), as the single env's.
         num_threads: Threads of the batch (including the caller's); default: every core.
         contact_checks: Contact-force reads per control step; default as the single env.
+        persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``), so
+            that :meth:`pin_touch_points` can read a simulation's contacts.
     """
 
     def __init__(
@@ -73,6 +77,7 @@ class MujocoBatch:
         control_dt: float,
         num_threads: int | None = None,
         contact_checks: int | None = None,
+        persistent: bool = False,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = default_threads() if num_threads is None else num_threads
@@ -83,12 +88,16 @@ class MujocoBatch:
         if contact_checks is None:
             contact_checks = default_contact_checks(self.substeps)
         self.checks = check_int("contact_checks", contact_checks, minimum=1, maximum=self.substeps)
-        self.batch = mujoco.batch.Batch(self.model, self.num_envs, nthread=self.num_threads)
+        self.batch = mujoco.batch.Batch(
+            self.model, self.num_envs, nthread=self.num_threads, persistent=persistent
+        )
         # Caller models throughout (the batch reads them live): a bent-pin draw replaces its
         # simulation's, and the sensors are switched off on each for the steps before a read.
         self._models = [self.model] * self.num_envs
         self.batch.set_models(self._models)
         self._sockets: list[SocketSpec] = [socket] * self.num_envs
+        self._compiled: dict[int, tuple[SocketSpec, mujoco.MjModel]] = {}
+        self._models_changed = False
         b = self.batch
         self._qpos, self._qvel = b.bind("qpos"), b.bind("qvel")
         self._act, self._ctrl = b.bind("act"), b.bind("ctrl")
@@ -98,19 +107,37 @@ class MujocoBatch:
         force = self.model.sensor("force").adr[0]
         self._force = slice(force, force + 3)
         self._torque_z = self.model.sensor("torque").adr[0] + 2
+        self._pin_geoms = pin_geom_ids(self.model)
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
             return
         self._sockets[index] = socket
-        same = socket is self.socket
-        self._models[index] = (
-            self.model if same else mujoco.MjModel.from_xml_string(make_mjcf(socket))
-        )
-        self.batch.set_models(self._models)
+        self._models[index] = self._compile(socket)
+        self._models_changed = True
+
+    def _compile(self, socket: SocketSpec) -> mujoco.MjModel:
+        """The model of ``socket``: the batch's own, or one compiled from its MJCF (the last
+        ``2 num_envs`` kept, by identity of the spec, for workpieces that come back)."""
+        if socket is self.socket:
+            return self.model
+        key = id(socket)
+        if key in self._compiled and self._compiled[key][0] is socket:
+            return self._compiled[key][1]
+        model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
+        if len(self._compiled) >= 2 * self.num_envs:
+            self._compiled.pop(next(iter(self._compiled)))
+        self._compiled[key] = (socket, model)
+        return model
+
+    def _sync_models(self) -> None:
+        if self._models_changed:
+            self.batch.set_models(self._models)
+            self._models_changed = False
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
+        self._sync_models()
         self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
         self._qpos[ids] = np.asarray(poses, dtype=float)[:, _SWAP_Z_THETA]
         self._act[ids] = self._qpos[ids]
@@ -120,6 +147,7 @@ class MujocoBatch:
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
+        self._sync_models()
         warning = self.batch.warning
         before = [sum(warning[i, :, 1].tolist()) for i in ids.tolist()]
         self._ctrl[ids] = np.asarray(velocities, dtype=float)[:, _SWAP_Z_THETA]
@@ -166,6 +194,19 @@ class MujocoBatch:
             ]
         ).reshape(len(ids), 4)
         return BatchState(qpos[:, _SWAP_Z_THETA], wrench, peak_force, errors)
+
+    def pin_forces(self, ids: np.ndarray) -> np.ndarray:
+        """Summed normal contact force on each pin (N) of simulations ``ids``, ``(n, pins)``,
+        as ``ServoStepper.pin_forces`` after the last step."""
+        return self._sensordata[np.asarray(ids, dtype=np.intp), self._touch] * _FORCE_SCALE
+
+    def pin_touch_points(self, index: int) -> np.ndarray:
+        """Where each pin of simulation ``index`` presses on the board after its last step,
+        as ``ServoStepper.pin_touch_points`` (a persistent batch only)."""
+        if not self.batch.persistent:
+            raise RuntimeError("pin_touch_points needs MujocoBatch(..., persistent=True)")
+        data = self.batch.get_data(index)
+        return pin_touch_points(self._models[index], data, self._pin_geoms)
 
     def simulation(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
         """Simulation ``index``'s model and a data at its state (forward kinematics run),

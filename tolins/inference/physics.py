@@ -50,8 +50,78 @@ def physics_attempt(
 def touch_bearings(backend: MujocoBackend, blocked: np.ndarray) -> np.ndarray:
     """The bearing (rad) of each ``blocked`` pin's touch point seen from its hole's centre;
     NaN for the other pins (``History.bearings``)."""
-    towards = backend.pin_touch_points() - backend.spec.hole_centers
+    return _bearings(backend.pin_touch_points(), backend.spec, blocked)
+
+
+def _bearings(points: np.ndarray, spec: CircularSocket, blocked: np.ndarray) -> np.ndarray:
+    towards = points - spec.hole_centers
     return np.where(blocked, np.arctan2(towards[:, 1], towards[:, 0]), np.nan)
+
+
+class AttemptBatch:
+    """Many workpieces' attempts at once, each :func:`physics_attempt`'s bit for bit: up to
+    ``slots`` downward pushes in one persistent :class:`~tolins.envs.mujoco_batch.MujocoBatch`
+    (each simulation on its own bent workpiece), stepped on ``num_threads`` threads.
+
+    Args:
+        spec: The nominal socket of the workpieces (one family, one model layout).
+        slots: Attempts simulated side by side.
+        num_threads: Threads of the batch (default: every core).
+    """
+
+    def __init__(self, spec: CircularSocket, slots: int = 32, num_threads: int | None = None):
+        from tolins.envs.mujoco_batch import MujocoBatch
+
+        self.slots = slots
+        self.physics = MujocoBatch(spec, slots, CONTROL_DT, num_threads, persistent=True)
+
+    def attempts(
+        self,
+        jobs: list[tuple[CircularSocket, np.ndarray]],
+        *,
+        start_height: float = 0.05,
+        success_depth: float = 1.0,
+        steps: int = 4,
+        touch_force: float = 0.05,
+    ) -> list[tuple[bool, np.ndarray, np.ndarray]]:
+        """``(inserted, blocked, bearings)`` of each ``(workpiece, goal)``, in order."""
+        results: list[tuple[bool, np.ndarray, np.ndarray]] = []
+        for first in range(0, len(jobs), self.slots):
+            chunk = jobs[first : first + self.slots]
+            results += self._chunk(chunk, start_height, success_depth, steps, touch_force)
+        return results
+
+    def _chunk(self, chunk, start_height, success_depth, steps, touch_force):
+        physics = self.physics
+        for k, (spec, _) in enumerate(chunk):
+            physics.set_socket(k, spec)
+        poses = [[*np.asarray(goal, dtype=float), start_height] for _, goal in chunk]
+        physics.reset(np.arange(len(chunk)), np.array(poses))
+        push = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
+        done: dict[int, tuple[bool, np.ndarray, np.ndarray]] = {}
+        active = list(range(len(chunk)))
+        for _ in range(steps):
+            state = physics.step(np.array(active), np.tile(push, (len(active), 1)))
+            for row, k in enumerate(active):
+                spec, goal = chunk[k]
+                if state.errors[row]:
+                    raise RuntimeError(f"physics attempt at {goal!r}: {state.errors[row]}")
+                if in_holes(spec, state.pose[row], success_depth):
+                    free = np.zeros(spec.n_pins, dtype=bool)
+                    done[k] = (True, free, np.full(spec.n_pins, np.nan))
+            active = [k for k in active if k not in done]
+            if not active:
+                break
+        if active:
+            forces = physics.pin_forces(np.array(active))
+            for row, k in enumerate(active):
+                blocked = forces[row] > touch_force
+                points = physics.pin_touch_points(k)
+                done[k] = (False, blocked, _bearings(points, chunk[k][0], blocked))
+        return [done[k] for k in range(len(chunk))]
+
+    def close(self) -> None:
+        self.physics.close()
 
 
 def make_backend(spec: CircularSocket) -> MujocoBackend:

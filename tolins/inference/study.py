@@ -18,7 +18,7 @@ pin offset by ``N(0, SIGMA² I)``. Control and measurement are perfect: attempt 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
@@ -65,10 +65,12 @@ class StudyConfig:
         seed: Seed of the defects and of every method's draws.
         max_attempts: Attempts per workpiece and method.
         particles: Posterior samples per goal query.
-        workers: Processes (the result does not depend on it).
+        workers: Processes, each running its share of the workpieces (the result does
+            not depend on it).
         methods: Methods to run, from :data:`METHODS`.
         physics: Outcomes, blocked pins and touch bearings from MuJoCo contact physics
-            (:func:`.physics.physics_attempt`) instead of the tolerance model.
+            (:func:`.physics.physics_attempt`, batched: :class:`.physics.AttemptBatch`)
+            instead of the tolerance model.
         discard_below: The inference methods give up on a workpiece (the paper's discard)
             when the best expected success ``g_{m+1}`` falls below this; 0: never.
     """
@@ -128,21 +130,28 @@ def draw_workpieces(samples: int, seed: int) -> np.ndarray:
 def run_study(
     config: StudyConfig, on_workpiece: Callable[[int], None] | None = None
 ) -> StudyResult:
-    """Run every method on every workpiece (``on_workpiece(k)`` after each)."""
+    """Run every method on every workpiece (``on_workpiece(k)`` after each), the workpieces
+    split into ``config.workers`` chunks run in processes. With ``physics`` a chunk's
+    methods run in lockstep: every pending attempt of every workpiece is one downward push
+    in a :class:`~tolins.inference.physics.AttemptBatch`."""
     offsets = draw_workpieces(config.samples, config.seed)
-    jobs = [(config, k, offsets[k]) for k in range(config.samples)]
+    chunks = np.array_split(np.arange(config.samples), min(config.workers, config.samples))
+    jobs = [(config, chunk, offsets[chunk]) for chunk in chunks]
     rows = []
     if config.workers == 1:
-        for job in jobs:
-            rows.append(_workpiece(job))
-            if on_workpiece:
-                on_workpiece(len(rows) - 1)
+        done = map(_chunk, jobs)
     else:
-        with ProcessPoolExecutor(config.workers) as pool:
-            for row in pool.map(_workpiece, jobs, chunksize=4):
+        pool = ProcessPoolExecutor(config.workers)
+        done = pool.map(_chunk, jobs)
+    try:
+        for chunk_rows in done:
+            for row in chunk_rows:
                 rows.append(row)
                 if on_workpiece:
                     on_workpiece(len(rows) - 1)
+    finally:
+        if config.workers != 1:
+            pool.shutdown()
     inside = pins_inside(SOCKET, offsets, np.zeros(3)).all(-1)
     possible = pins_inside(SOCKET, offsets, centre_goals(SOCKET, offsets)).all(-1)
     attempts = {m: np.array([row[m] for row in rows]) for m in config.methods}
@@ -152,17 +161,64 @@ def run_study(
 #: An attempt at a goal: which pins are in their holes, and each blocked pin's bearing
 #: (rad, NaN for the pins inside).
 Outcome = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: A method's run on one workpiece: yields each goal, is sent the attempt's ``Outcome``
+#: result, returns the attempt (1-based) that inserted, 0 if none.
+Attempts = Generator[np.ndarray, tuple[np.ndarray, np.ndarray], int]
 
 
-def _workpiece(job: tuple[StudyConfig, int, np.ndarray]) -> dict[str, int]:
-    config, index, eps = job
-    outcome = physics_outcome(eps) if config.physics else geometry_outcome(eps)
-    # Each method's stream is keyed by its place in METHODS, not in config.methods, so a
-    # method's result does not depend on which other methods run.
-    return {
-        m: _attempts(m, outcome, eps, config, _method_rng(config.seed, index, m))
+def _chunk(job: tuple[StudyConfig, np.ndarray, np.ndarray]) -> list[dict[str, int]]:
+    """Every method's result on each workpiece of a chunk (``job``: config, indices,
+    offsets)."""
+    config, indices, offsets = job
+    runs = {
+        (k, m): _attempt_goals(m, eps, config, _method_rng(config.seed, int(index), m))
+        for k, (index, eps) in enumerate(zip(indices, offsets, strict=True))
         for m in config.methods
     }
+    if config.physics:
+        results = _lockstep_physics(runs, offsets)
+    else:
+        results = {key: _drive(run, geometry_outcome(offsets[key[0]])) for key, run in runs.items()}
+    return [{m: results[(k, m)] for m in config.methods} for k in range(len(indices))]
+
+
+def _drive(run: Attempts, outcome: Outcome) -> int:
+    """Run one method's attempts, each answered by ``outcome``."""
+    try:
+        goal = next(run)
+        while True:
+            goal = run.send(outcome(goal))
+    except StopIteration as stop:
+        return stop.value
+
+
+def _lockstep_physics(runs: dict[tuple[int, str], Attempts], offsets: np.ndarray) -> dict:
+    """Advance every run by one attempt per round, all of a round's pushes in one batch."""
+    import dataclasses
+
+    from tolins.inference.physics import AttemptBatch
+
+    specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
+    batch = AttemptBatch(SOCKET, slots=min(64, len(runs)), num_threads=1)
+    results, pending = {}, {}
+    for key, run in runs.items():
+        try:
+            pending[key] = next(run)
+        except StopIteration as stop:
+            results[key] = stop.value
+    try:
+        while pending:
+            keys = list(pending)
+            outcomes = batch.attempts([(specs[key[0]], pending[key]) for key in keys])
+            for key, (_, blocked, bearings) in zip(keys, outcomes, strict=True):
+                try:
+                    pending[key] = runs[key].send((~blocked, bearings))
+                except StopIteration as stop:
+                    results[key] = stop.value
+                    del pending[key]
+    finally:
+        batch.close()
+    return results
 
 
 def _method_rng(seed: int, index: int, method: str) -> np.random.Generator:
@@ -181,29 +237,15 @@ def geometry_outcome(eps: np.ndarray) -> Outcome:
     return attempt
 
 
-def physics_outcome(eps: np.ndarray) -> Outcome:
-    """Which pins are not blocked at a goal (all when inserted), and the bearings, by MuJoCo."""
-    import dataclasses
-
-    from tolins.inference.physics import make_backend, physics_attempt
-
-    backend = make_backend(dataclasses.replace(SOCKET, pin_offsets=eps))
-
-    def attempt(goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        _, blocked, bearings = physics_attempt(backend, goal)
-        return ~blocked, bearings
-
-    return attempt
-
-
-def _attempts(
-    method: str, outcome: Outcome, eps: np.ndarray, config: StudyConfig, rng: np.random.Generator
-) -> int:
-    """The attempt (1-based) at which ``method`` inserts workpiece ``eps``, 0 if none."""
+def _attempt_goals(
+    method: str, eps: np.ndarray, config: StudyConfig, rng: np.random.Generator
+) -> Attempts:
+    """The attempts of ``method`` on workpiece ``eps`` (:data:`Attempts`)."""
     goals = _fixed_goals(method, eps, config.max_attempts, rng)
     if goals is not None:
         for attempt, goal in enumerate(goals, start=1):
-            if outcome(goal)[0].all():
+            inside, _ = yield goal
+            if inside.all():
                 return attempt
         return 0
     with_blocked, with_bearings = EVIDENCE[method]
@@ -214,12 +256,11 @@ def _attempts(
         )
         if found.discard:
             return 0
-        goal = found.goal
-        inside, bearings = outcome(goal)
+        inside, bearings = yield found.goal
         if inside.all():
             return attempt
         history = history.append(
-            goal,
+            found.goal,
             False,
             ~inside if with_blocked else None,
             bearings if with_bearings else None,

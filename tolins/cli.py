@@ -83,7 +83,10 @@ def _replay(args: argparse.Namespace) -> int:
             step=args.step,
             time=args.time,
         )
-    except (RrdError, ValueError, RuntimeError) as error:
+    except (RrdError, ValueError) as error:  # the file, or a step/time outside it
+        print(f"tolins replay: {error}", file=sys.stderr)
+        return 2
+    except RuntimeError as error:  # the viewer failed
         print(f"tolins replay: {error}", file=sys.stderr)
         return 1
 
@@ -111,7 +114,12 @@ def _embed_train(args: argparse.Namespace) -> int:
             bar.set_postfix(loss=f"{loss:.4f}")
             bar.update()
 
-        result = train_embedding(config, on_epoch=advance)
+        try:
+            result = train_embedding(config, on_epoch=advance)
+        except ValueError as error:  # diverged: no checkpoint of NaN weights
+            bar.close()
+            print(f"tolins embed train: {error}", file=sys.stderr)
+            return 2
     path = save_checkpoint(out, result.model)
     quality = measure(result.model, held_out_specs(config.family, args.held_out))
     print(
@@ -207,7 +215,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--step", type=int, help="the control step the screenshot shows (default: the last)"
     )
     when.add_argument(
-        "--time", type=float, metavar="SECONDS", help="the simulated time the screenshot shows"
+        "--time",
+        type=cli_checks.non_negative_float,
+        metavar="SECONDS",
+        help="the simulated time the screenshot shows",
     )
     replay.add_argument(
         "--port", type=cli_checks.port, default=9090, help="web viewer port (with --web)"
@@ -288,6 +299,7 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
     study.add_argument("--workers", type=positive_int, default=2, help="processes")
     study.add_argument(
         "--methods",
+        action=cli_checks.JoinedList,
         help="comma-separated subset of inference, inference_blocked, inference_contact, "
         "random, nominal, oracle (default: all)",
     )
@@ -328,6 +340,14 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # finished stages, checkpoints and written files stay
         print(f"{_prog(args)}: interrupted", file=sys.stderr)
         return 130
+    except RuntimeError as error:
+        from tolins.learning.external import PolicyError
+
+        if not isinstance(error, PolicyError):
+            raise
+        print(error.details, end="", file=sys.stderr)  # the user's policy's own traceback
+        print(f"{_prog(args)}: {error} (its traceback above)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ line on stderr and exit status 2 (``tolins.cli.main``).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import tempfile
@@ -69,6 +70,26 @@ def port(text: str) -> int:
 def positive_int(text: str) -> int:
     """A count option: an integer ≥ 1."""
     return _integer(text, 1)
+
+
+class JoinedList(argparse.Action):
+    """A comma-separated list option that adds up when repeated: ``--rows A --rows B,C``
+    is ``--rows A,B,C`` (not the last one alone)."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        before = getattr(namespace, self.dest, None)
+        setattr(namespace, self.dest, values if before is None else f"{before},{values}")
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number option ≥ 0 (a time, a distance)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}; allowed: a finite number ≥ 0")
+    return value
 
 
 def env_ids(

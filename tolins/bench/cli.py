@@ -6,10 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from tolins.bench.config import BACKENDS, BenchConfig
+from tolins.bench.config import BACKENDS, SEEDS_MAX, BenchConfig
 from tolins.bench.executor import EXECUTORS
 from tolins.bench.profiles import PROFILES
-from tolins.cli_checks import fail, output_folder, positive_int
+from tolins.cli_checks import JoinedList, fail, output_folder, positive_int
 
 
 def add_bench_parser(commands: argparse._SubParsersAction) -> None:
@@ -28,9 +28,17 @@ def add_bench_parser(commands: argparse._SubParsersAction) -> None:
         choices=list(PROFILES),
         help="budgets: quick (≤ 15 min on 2 cores), paper (the paper's), tiny (smoke test)",
     )
-    bench.add_argument("--rows", help="comma-separated row ids, e.g. C2.1,C2.3 (default: all)")
+    bench.add_argument(
+        "--rows",
+        action=JoinedList,
+        help="comma-separated row ids, e.g. C2.1,C2.3 (default: all); repeated, they add up",
+    )
     bench.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
-    bench.add_argument("--seeds", type=positive_int, help="training seeds (default: the profile's)")
+    bench.add_argument(
+        "--seeds",
+        type=positive_int,
+        help=f"training seeds, at most {SEEDS_MAX} (default: the profile's)",
+    )
     bench.add_argument("--out", help="output folder (default: results/PROFILE)")
     bench.add_argument("--workers", type=positive_int, default=2, help="evaluation threads")
     bench.add_argument("--no-study", action="store_true", help="skip the inference study")

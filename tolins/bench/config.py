@@ -16,6 +16,11 @@ RECORDING = "episodes.rrd"
 EPISODES = "episodes.json"
 
 
+#: The most training seeds of a bench: each is a whole training of every row (the paper
+#: profile's five take 107 min on 2 cores).
+SEEDS_MAX = 100
+
+
 @dataclass(frozen=True)
 class BenchConfig:
     """What ``tolins bench`` runs.
@@ -49,8 +54,10 @@ class BenchConfig:
             raise ValueError(f"profile={self.profile!r}; allowed: {', '.join(PROFILES)}")
         if self.backend not in BACKENDS:
             raise ValueError(f"backend={self.backend!r}; allowed: {', '.join(BACKENDS)}")
-        if self.seeds is not None and (not isinstance(self.seeds, int) or self.seeds < 1):
-            raise ValueError(f"seeds={self.seeds!r}; allowed: an integer ≥ 1")
+        if self.seeds is not None and (
+            not isinstance(self.seeds, int) or not 1 <= self.seeds <= SEEDS_MAX
+        ):
+            raise ValueError(f"seeds={self.seeds!r}; allowed: an integer 1 … {SEEDS_MAX}")
         if not isinstance(self.workers, int) or self.workers < 1:
             raise ValueError(f"workers={self.workers!r}; allowed: an integer ≥ 1")
         if self.executor not in EXECUTORS:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import pickle
 from collections.abc import Iterator
@@ -67,6 +68,20 @@ def run_metadata(seed: int, **configs: Any) -> dict[str, Any]:
         "seed": int(seed),
         "tolins_version": tolins.__version__,
     }
+
+
+def check_finite_training(
+    what: str, epoch: int, loss: float, network: torch.nn.Module, learning_rate: float
+) -> None:
+    """Raise ``ValueError`` when a training has diverged: ``loss`` (of ``epoch``) or a
+    weight of ``network`` is NaN or infinite, so that no model of NaN weights is saved."""
+    finite = math.isfinite(loss) and all(bool(p.isfinite().all()) for p in network.parameters())
+    if not finite:
+        raise ValueError(
+            f"{what} diverged: loss {loss:g} at epoch {epoch}, weights not all finite "
+            f"(learning_rate={learning_rate:g}); nothing written; allowed: a smaller "
+            "--learning-rate"
+        )
 
 
 @contextlib.contextmanager

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from tolins.learning.artefacts import single_threaded_torch
+from tolins.learning.artefacts import check_finite_training, single_threaded_torch
 from tolins.learning.demonstrations import Rollout, pairs
 from tolins.learning.policy import Policy, PolicyArchitecture
 from tolins.learning.policy_config import BCConfig
@@ -73,6 +73,7 @@ def _clone(demonstrations, config, seed, on_epoch) -> BCResult:
             optimiser.step()
             total += loss.item() * len(batch)
         losses.append(total / len(obs))
+        check_finite_training("behaviour cloning", epoch, losses[-1], policy, config.learning_rate)
         if on_epoch is not None:
             on_epoch(epoch, losses[-1])
     policy.eval()

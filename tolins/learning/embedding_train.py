@@ -12,6 +12,7 @@ import torch
 
 import tolins
 from tolins.geometry.tolerance import WINDOWS
+from tolins.learning.artefacts import check_finite_training
 from tolins.learning.autoencoder import (
     Architecture,
     ToleranceAutoencoder,
@@ -85,8 +86,18 @@ def _train(
             if math.isnan(first_loss):
                 first_loss = losses[0]
         epoch_losses.append(float(np.mean(losses)))
+        check_finite_training(
+            "embedding training", epoch, epoch_losses[-1], network, config.learning_rate
+        )
         if on_epoch is not None:
             on_epoch(epoch, epoch_losses[-1])
+    network.eval()
+    with torch.no_grad():  # weights finite but so large that the outputs are not
+        probe = targets[: config.batch_size]
+        loss = float(reconstruction_loss(network(probe), probe, config.theta_weight))
+    check_finite_training(
+        "embedding training", config.epochs - 1, loss, network, config.learning_rate
+    )
     model = EmbeddingModel(
         family=config.family,
         network=network.eval(),

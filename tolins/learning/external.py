@@ -19,6 +19,7 @@ import importlib
 import json
 import os
 import sys
+import traceback
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
@@ -47,10 +48,29 @@ _SB3_ALGORITHMS = {
 }
 
 
+class PolicyError(RuntimeError):
+    """A user's policy raised (also ``SystemExit``): the message names the policy and its
+    exception (chained as ``__cause__``), ``details`` is that exception's traceback."""
+
+    def __init__(self, name: str, error: BaseException) -> None:
+        message = str(error).strip().splitlines()[0] if str(error).strip() else ""
+        super().__init__(f"{name} raised {type(error).__name__}" + (f": {message}" * bool(message)))
+        self.details = "".join(traceback.format_exception(error))
+
+
+def _calling(name: str, fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)``, an exception of the user's code raised as :class:`PolicyError`."""
+    try:
+        return fn(*args)
+    except (Exception, SystemExit) as error:
+        raise PolicyError(name, error) from error
+
+
 def as_actor(policy: Any, name: str = "policy") -> Actor:
     """``policy`` (see the module's protocol) as ``observation -> action (4,) float64``.
 
-    Each action is checked: ``ValueError`` when it is not 4 finite numbers.
+    Each action is checked: ``ValueError`` when it is not 4 finite numbers; whatever the
+    policy raises (``SystemExit`` too) comes out as :class:`PolicyError`.
     """
     if hasattr(policy, "predict"):
 
@@ -69,10 +89,15 @@ def as_actor(policy: Any, name: str = "policy") -> Actor:
         )
 
     def act(observation: np.ndarray) -> np.ndarray:
-        action = np.asarray(call(observation), dtype=np.float64).reshape(-1)
+        out = _calling(name, call, observation)
+        try:
+            action = np.asarray(out, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            action = np.full(1, np.nan)
         if action.shape != (4,) or not np.all(np.isfinite(action)):
+            shown = repr(action.tolist() if action.size > 1 else out)
             raise ValueError(
-                f"{name} returned {action.tolist()!r}; allowed: 4 finite numbers "
+                f"{name} returned {shown[:200]}; allowed: 4 finite numbers "
                 "[ux, uy, utheta, uz] (mm/s, rad/s)"
             )
         return action
@@ -92,12 +117,14 @@ def import_policy(target: str) -> Actor:
         obj: Any = importlib.import_module(module_name)
     except ImportError as error:
         raise ValueError(f"policy {target!r}: cannot import {module_name!r} ({error})") from error
+    except (Exception, SystemExit) as error:  # the module's own code, run on import
+        raise PolicyError(f"policy {target!r} (importing {module_name!r})", error) from error
     for part in attribute.split("."):
         if not hasattr(obj, part):
             raise ValueError(f"policy {target!r}: module {module_name!r} has no {attribute!r}")
         obj = getattr(obj, part)
     if isinstance(obj, type):
-        obj = obj()
+        obj = _calling(f"policy {target!r} ({attribute}())", obj)
     return as_actor(obj, name=f"policy {target!r}")
 
 

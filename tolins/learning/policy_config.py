@@ -19,6 +19,18 @@ def _check_at_least(config: object, names: tuple[str, ...], minimum: int) -> Non
             raise ValueError(f"{name}={value!r}; allowed: an integer ≥ {minimum}")
 
 
+#: The most units a hidden layer may have (a 4096 × 4096 layer is 67 MB of float32; a
+#: billion units would not fit in memory, and CMA-ES searches every weight).
+HIDDEN_MAX = 4096
+
+
+def _check_hidden(config: object, names: tuple[str, ...]) -> None:
+    for name in names:
+        value = getattr(config, name)
+        if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= HIDDEN_MAX:
+            raise ValueError(f"{name}={value!r}; allowed: an integer 1 … {HIDDEN_MAX}")
+
+
 def _check_positive(config: object, names: tuple[str, ...]) -> None:
     for name in names:
         value = getattr(config, name)
@@ -60,7 +72,8 @@ class BCConfig:
     """Fraction of the demonstration episodes kept out of training to measure the fit."""
 
     def __post_init__(self) -> None:
-        _check_at_least(self, ("hidden", "epochs", "batch_size"), 1)
+        _check_at_least(self, ("epochs", "batch_size"), 1)
+        _check_hidden(self, ("hidden",))
         _check_positive(self, ("learning_rate",))
         if not 0 < self.held_out < 1:
             raise ValueError(f"held_out={self.held_out!r}; allowed: 0 < held_out < 1")
@@ -103,7 +116,7 @@ class RSGailConfig:
     def __post_init__(self) -> None:
         _check_at_least(self, ("iterations", "discriminator_every", "eval_episodes"), 1)
         _check_at_least(self, ("episodes", "discriminator_steps", "workers", "patience"), 1)
-        _check_at_least(self, ("discriminator_hidden",), 1)
+        _check_hidden(self, ("discriminator_hidden",))
         _check_at_least(self, ("popsize",), 2)
         _check_positive(self, ("sigma0",))
         for name in ("alpha", "alpha_start"):
@@ -125,3 +138,6 @@ class ResidualConfig:
 
     residual_hidden: int = 32
     """Units in the residual network's hidden layer (input: observation and ψ)."""
+
+    def __post_init__(self) -> None:
+        _check_hidden(self, ("residual_hidden",))

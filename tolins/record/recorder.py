@@ -19,6 +19,7 @@ from tolins.record.episode import EpisodeBuffer, send_episode
 from tolins.record.layout import default_blueprint
 from tolins.record.metadata import spec_to_dict
 from tolins.record.scene import log_board
+from tolins.record.stale import remove_dead_temporaries
 from tolins.rollouts.episodes import Episode, Policy, run_episode
 
 APPLICATION_ID = "tolins"
@@ -50,6 +51,7 @@ class RrdFile:
         self, path: str | os.PathLike[str], blueprint: rrb.Blueprint | None = None
     ) -> None:
         self.path = check_output_path(path)
+        remove_dead_temporaries(self.path)
         self._tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
         self.stream = rr.RecordingStream(APPLICATION_ID)
         self.stream.save(self._tmp, default_blueprint=blueprint or default_blueprint())

@@ -17,6 +17,7 @@ import numpy as np
 from rerun.chunk import RrdReader
 
 from tolins.record.snapshot import cut_recording
+from tolins.record.stale import remove_dead_temporaries
 
 LOOPBACK = "127.0.0.1"
 #: Screenshot size in logical points.
@@ -120,6 +121,7 @@ def take_screenshot(
         raise ValueError(f"screenshot={str(out)!r}; allowed: a path ending in .png")
     if not out.parent.is_dir():
         raise ValueError(f"screenshot={str(out)!r}: folder {out.parent} does not exist")
+    remove_dead_temporaries(out)
     tmp = _temporary_beside(out)
     cut = out.with_name(f".{out.stem}.{os.getpid()}.cut.rrd")
     try:

@@ -10,6 +10,7 @@ last step kept, and the plots up to it.
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 
@@ -41,11 +42,11 @@ def cut_recording(
     """
     if step is not None and time is not None:
         raise ValueError("step and time are both set; allowed: at most one")
-    if (step is not None and step < 0) or (time is not None and time < 0):
-        raise ValueError(f"step={step}, time={time}; allowed: ≥ 0")
+    if (step is not None and step < 0) or (time is not None and not 0 <= time < math.inf):
+        raise ValueError(f"step={step}, time={time}; allowed: ≥ 0 (a time: finite)")
     reader = RrdReader(source)
     (entry,) = reader.recordings()
-    last = {"kept": -1, "all": -1}
+    last = {"kept": -1, "all": -1, "time_ns": -1}
 
     def cut(chunk: Chunk) -> list[Chunk]:
         if STEP not in chunk.timeline_names:
@@ -56,7 +57,9 @@ def cut_recording(
         if step is not None:
             keep = pc.less_equal(steps, step)
         elif time is not None:
-            limit = pa.scalar(round(time * 1e9), type=pa.duration("ns"))
+            times = batch.column(SIM_TIME).cast(pa.int64())
+            last["time_ns"] = max(last["time_ns"], pc.max(times).as_py())
+            limit = pa.scalar(round(min(time, 4e9) * 1e9), type=pa.duration("ns"))
             keep = pc.less_equal(batch.column(SIM_TIME), limit)
         else:
             keep = pc.greater_equal(steps, 0)
@@ -71,6 +74,9 @@ def cut_recording(
         raise ValueError(f"{source}: no {STEP!r} timeline; allowed: a recording made by tolins")
     if step is not None and step > last["all"]:
         raise ValueError(f"{source}: step {step} is past its last step; allowed: 0 … {last['all']}")
+    if time is not None and time * 1e9 > last["time_ns"]:
+        end = last["time_ns"] / 1e9
+        raise ValueError(f"{source}: time {time:g} s is past its end; allowed: 0 … {end:g} s")
     stream = rr.RecordingStream(
         entry.application_id, recording_id=entry.recording_id, send_properties=False
     )

@@ -156,7 +156,17 @@ def _sb3_zip(tmp_path: Path, algorithm: str) -> Path:
     from tolins.learning.sb3 import make_model
     from tolins.learning.sb3_config import Sb3Config
 
-    model = make_model(Sb3Config(algorithm, ENV, backend="kinematic", env_steps=10))
+    if algorithm in ("ppo", "sac"):  # tolins's: its observation scale in the network
+        model = make_model(Sb3Config(algorithm, ENV, backend="kinematic", env_steps=10))
+    else:  # SB3's defaults
+        import stable_baselines3
+
+        from tolins.envs.wrappers import agent_env
+
+        env = agent_env(ENV, backend="kinematic")
+        model = getattr(stable_baselines3, algorithm.upper())(
+            "MlpPolicy", env, seed=0, device="cpu"
+        )
     path = tmp_path / f"{algorithm}.zip"
     model.save(path)
     return path
@@ -174,7 +184,7 @@ def _replace_data(path: Path, out: Path, edit) -> Path:
     return out
 
 
-@pytest.mark.parametrize("algorithm", ["ppo", "sac"])
+@pytest.mark.parametrize("algorithm", ["ppo", "sac", "a2c", "td3"])
 def test_an_sb3_zip_loads_without_unpickling_and_acts_as_sb3s_load(tmp_path, algorithm):
     from tolins.learning.external import load_sb3
 
@@ -243,3 +253,31 @@ def test_pickle_payload_helper_is_real(tmp_path):
     marker = tmp_path / "ran"
     pickle.load(io.BytesIO(_payload(marker)))
     assert marker.exists()
+
+
+# --- Minari datasets (tolins train --demos) ------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", ["tolins/Circle2x2-v1", "evil/Env-v0"])
+def test_a_dataset_naming_foreign_code_does_not_import_it(tmp_path, monkeypatch, env_id):
+    pytest.importorskip("minari")
+    from tolins.datasets.reader import load_demonstrations
+
+    root = tmp_path / "ds"
+    args = ["dataset", "--env", ENV, "--recipe", "expert-safe", "--episodes", "2"]
+    assert main([*args, "--backend", "kinematic", "--out", str(root)]) == 0
+    (metadata,) = root.glob("**/data/metadata.json")
+    document = json.loads(metadata.read_text())
+    spec = json.loads(document["env_spec"])
+    spec.update(id=env_id, entry_point="evil_dataset_module:make")
+    document["env_spec"] = json.dumps(spec)
+    metadata.write_text(json.dumps(document))
+    marker = tmp_path / "ran"
+    (tmp_path / "evil_dataset_module.py").write_text(f"open({str(marker)!r}, 'w')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    if env_id == ENV:
+        assert len(load_demonstrations(metadata.parent, ENV)) == 2  # our registry's env
+    else:
+        with pytest.raises(ValueError, match="is not a tolins env"):
+            load_demonstrations(metadata.parent)
+    assert not marker.exists()

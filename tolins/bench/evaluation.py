@@ -9,7 +9,7 @@ import gymnasium as gym
 
 from tolins.bench.table import Row
 from tolins.learning.actors import make_actor
-from tolins.rollouts.episodes import Episode, Policy, run_episode
+from tolins.rollouts.episodes import Episode, Policy, episode_from_dict, run_episode
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
 #: Evaluation seeds start here (no training run uses them); seed index ``s`` of the
@@ -121,4 +121,4 @@ def episodes_to_json(episodes: list[Episode]) -> list[dict]:
 
 
 def episodes_from_json(rows: list[dict]) -> list[Episode]:
-    return [Episode(**row) for row in rows]
+    return [episode_from_dict(row) for row in rows]

@@ -15,10 +15,13 @@ from tolins.bench.evaluation import FIRST_SEED
 from tolins.bench.statistics import row_intervals
 from tolins.bench.table import Row
 from tolins.rollouts.episodes import Episode
+from tolins.rollouts.forces import FORCE_FIGURES
 
 FIGURES = ("reward", "success", "steps", "collisions")
-#: The version of ``results.json``'s layout, its ``schema`` field.
-SCHEMA = "tolins.results/1"
+#: The version of ``results.json``'s layout, its ``schema`` field (/2: the force figures).
+SCHEMA = "tolins.results/2"
+#: The schemas :func:`read_results` reads (/1 has no force figures).
+READABLE = ("tolins.results/1", SCHEMA)
 
 
 def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
@@ -57,6 +60,27 @@ def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
         entry[f"{name}_per_seed"] = [float(np.mean(v)) for v in values[name]]
     entry["reward_per_episode"] = [[float(r) for r in seed] for seed in values["reward"]]
     entry.update(row_intervals(values))
+    entry.update(force_figures(per_seed))
+    return entry
+
+
+def force_figures(per_seed: list[list[Episode]]) -> dict[str, Any]:
+    """The force-aware figures of a row (:mod:`tolins.rollouts.forces`): for each of
+    ``peak_force``, ``contact_force``, ``impulse``, ``jams``, ``cycle_time`` its ``_mean``
+    and ``_std`` (as :func:`row_entry`'s), ``_per_seed`` and ``_per_episode``; empty when
+    an episode has no force scores (a record of tolins < 0.4)."""
+    if any(e.forces is None for seed in per_seed for e in seed):
+        return {}
+    over_seeds = len(per_seed) > 1
+    entry: dict[str, Any] = {}
+    for name in FORCE_FIGURES:
+        values = [[float(getattr(e.forces, name)) for e in seed] for seed in per_seed]
+        flat = np.concatenate([np.asarray(v) for v in values])
+        spread = [np.mean(v) for v in values] if over_seeds else flat
+        entry[f"{name}_mean"] = float(flat.mean())
+        entry[f"{name}_std"] = float(np.std(spread))
+        entry[f"{name}_per_seed"] = [float(np.mean(v)) for v in values]
+        entry[f"{name}_per_episode"] = values
     return entry
 
 
@@ -95,14 +119,15 @@ def read_results(path: str | os.PathLike) -> dict[str, Any]:
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path}: not JSON ({error})") from error
     if not isinstance(document, dict):
-        raise ValueError(f"{path}: not a results document; allowed: schema {SCHEMA!r}")
+        raise ValueError(f"{path}: not a results document; allowed: schema {READABLE[-1]!r}")
     if "schema" not in document and all(
         isinstance(v, dict) and "reward_mean" in v for v in document.values()
     ):
         fields = ("source", "tolins_version", "date", "backend", "profile", "first_eval_seed")
         return {"schema": None, **dict.fromkeys(fields), "rows": document}
-    if document.get("schema") != SCHEMA:
-        raise ValueError(f"{path}: schema {document.get('schema')!r}; allowed: {SCHEMA!r}")
+    if document.get("schema") not in READABLE:
+        allowed = " or ".join(repr(s) for s in READABLE)
+        raise ValueError(f"{path}: schema {document.get('schema')!r}; allowed: {allowed}")
     if not isinstance(document.get("rows"), dict):
         found = "no" if "rows" not in document else type(document["rows"]).__name__
         raise ValueError(f"{path}: {found} 'rows'; allowed: an object of row id -> row entry")

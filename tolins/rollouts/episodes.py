@@ -16,27 +16,38 @@ import numpy as np
 
 import tolins.envs  # noqa: F401  (registers the env ids)
 from tolins.envs.episode import check_action
+from tolins.rollouts.forces import ForceScores, ForceTracker
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
 class Episode:
-    """What one episode came to."""
+    """What one episode came to; ``forces`` are its force-aware scores
+    (:mod:`tolins.rollouts.forces`; ``None`` in a record made before tolins 0.4)."""
 
     reward: float
     success: bool
     steps: int
     collisions: int
     error: str | None = None
+    forces: ForceScores | None = None
+
+
+def episode_from_dict(row: dict) -> Episode:
+    """The :class:`Episode` of ``dataclasses.asdict(episode)`` (as JSON gives it back)."""
+    forces = row.get("forces")
+    return Episode(**{**row, "forces": None if forces is None else ForceScores(**forces)})
 
 
 def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episode:
     """Run ``policy`` in ``env`` from ``reset(seed=seed)`` until the episode ends."""
     observation, info = env.reset(seed=seed)
+    forces = ForceTracker.of(env.unwrapped.settings, info)
     total, done = 0.0, False
     while not done:
         observation, reward, terminated, truncated, info = env.step(policy(observation))
+        forces.step(info["peak_force"], info["pose"][3])
         total += reward
         done = terminated or truncated
     return Episode(
@@ -45,6 +56,7 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
         int(info["step"]),
         int(info["n_collisions"]),
         info.get("error"),
+        forces.scores(),
     )
 
 

@@ -21,6 +21,7 @@ from tolins.envs.episode import check_action
 from tolins.envs.tasks import make_vec
 from tolins.envs.vector import InsertionVectorEnv
 from tolins.rollouts.episodes import Episode, Policy, Rollout, check_env_id
+from tolins.rollouts.forces import ForceTracker
 
 
 @dataclass(frozen=True)
@@ -67,8 +68,8 @@ class VectorEnvCache:
 class _Slot:
     """The episode a slot runs: its job's index and what it has recorded so far."""
 
-    def __init__(self, job: int) -> None:
-        self.job, self.total = job, 0.0
+    def __init__(self, job: int, forces: ForceTracker) -> None:
+        self.job, self.total, self.forces = job, 0.0, forces
         self.observations: list[np.ndarray] = []
         self.actions: list[np.ndarray] = []
 
@@ -105,6 +106,7 @@ def _run_in(env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]):
             if slot is None:
                 continue
             slot.total += rewards[i]
+            slot.forces.step(infos["peak_force"][i], infos["pose"][i][3])
             if terminated[i] or truncated[i]:
                 yield slot.job, _finish(slot, infos, i)
                 slots[i], ended = None, True
@@ -116,13 +118,21 @@ def _start(env, jobs, queue, slots, observations=None) -> np.ndarray:
     """Put the next queued jobs into the free slots and reset those slots with their seeds."""
     mask = np.zeros(env.num_envs, dtype=bool)
     seeds: list[int | None] = [None] * env.num_envs
+    starting: dict[int, int] = {}
     for i in range(env.num_envs):
         if slots[i] is None and queue:
-            slots[i] = _Slot(queue.popleft())
-            mask[i], seeds[i] = True, int(jobs[slots[i].job].seed)
+            starting[i] = queue.popleft()
+            mask[i], seeds[i] = True, int(jobs[starting[i]].seed)
     if not mask.any():
         return observations
-    fresh, _ = env.reset(seed=seeds, options={"reset_mask": mask})
+    fresh, infos = env.reset(seed=seeds, options={"reset_mask": mask})
+    for i, job in starting.items():
+        z = float(infos["pose"][i][3])
+        settings = env.settings
+        tracker = ForceTracker(
+            z, control_dt=settings.control_dt, collision_force=settings.collision_force
+        )
+        slots[i] = _Slot(job, tracker)
     if observations is None:
         return fresh
     observations = observations.copy()
@@ -142,4 +152,5 @@ def _finish(slot: _Slot, infos: dict, i: int) -> tuple[Rollout, Episode]:
         success,
         collisions,
     )
-    return rollout, Episode(total, success, int(infos["step"][i]), collisions, error)
+    steps = int(infos["step"][i])
+    return rollout, Episode(total, success, steps, collisions, error, slot.forces.scores())

@@ -16,8 +16,9 @@ in one batch each:
   outcome ``in`` (:func:`~tolins.geometry.workspace.in_holes` 1 mm deep) or not. Reported:
   agreement of Warp with C MuJoCo and with the geometry, outside ±``--band`` µm.
 * **capture**: the 2*2 socket offset in x by 0.1960 … 0.2060 mm in 0.5 µm steps
-  (clearance 0.2 mm), pushed down at 2.5 mm/s: the largest offset that inserts, less the
-  clearance, per backend.
+  (clearance 0.2 mm), in theta by 0.0494 … 0.0512 rad in 0.1 mrad steps (geometric
+  0.0499), the square peg in x by 0.1050 … 0.1100 mm (geometric 0.1061), pushed down at
+  2.5 mm/s: the largest offset that inserts, less the geometric limit, per backend.
 * **forces**: two blocked pushes held for 4 control steps (down onto the board 0.25 mm
   off the holes; sideways at 2.5 mm/s against a hole wall, pins 0.5 mm deep): largest
   difference of the wrench ``[Fx, Fy, q_theta, Fz]`` and of ``peak_force`` (N, N·mm).
@@ -123,21 +124,44 @@ def summarise(r: dict, band: float) -> dict:
     }
 
 
-def capture(device: str, offsets: np.ndarray = CLEARANCE_OFFSETS) -> dict:
-    """Largest x offset of the 2*2 socket that inserts, less its 0.2 mm clearance (µm)."""
-    spec = CircularSocket(2, 2)
-    poses = np.column_stack([offsets, np.zeros((len(offsets), 2))])
+#: (case, socket, pose axis, offsets, geometric limit) of the capture measurement.
+CAPTURE_CASES = (
+    ("2*2, x", CircularSocket(2, 2), 0, CLEARANCE_OFFSETS, 0.2),
+    (
+        "2*2, theta",
+        CircularSocket(2, 2),
+        2,
+        np.round(np.arange(0.0494, 0.05121, 0.0001), 4),
+        0.0499,
+    ),
+    (
+        "square, x",
+        PolygonSocket(4, 1.5, 1.65),
+        0,
+        np.round(np.arange(0.1050, 0.11001, 0.0005), 4),
+        0.1061,
+    ),
+)
+
+
+def capture(device: str, cases=CAPTURE_CASES) -> dict:
+    """Per case: the largest offset along the axis that inserts, the smallest that
+    blocks, and the first less the geometric limit (µm, or mrad for theta)."""
     result = {}
-    for backend, batch in batches(spec, len(offsets), device).items():
-        inserted = push_down(batch, spec, poses)
-        result[backend] = {
-            "inserted_up_to_mm": float(offsets[inserted].max()) if inserted.any() else None,
-            "blocked_from_mm": float(offsets[~inserted].min()) if (~inserted).any() else None,
-            "capture_um": round((float(offsets[inserted].max()) - spec.clearance) * 1e3, 2)
-            if inserted.any()
-            else None,
-        }
-        batch.close()
+    for case, spec, axis, offsets, limit in cases:
+        poses = np.zeros((len(offsets), 3))
+        poses[:, axis] = offsets
+        result[case] = {"limit": limit}
+        for backend, batch in batches(spec, len(offsets), device).items():
+            inserted = push_down(batch, spec, poses)
+            top = float(offsets[inserted].max()) if inserted.any() else None
+            result[case][backend] = {
+                "inserted_up_to": top,
+                "blocked_from": float(offsets[~inserted].min()) if (~inserted).any() else None,
+                "beyond_limit_um_or_mrad": None if top is None else round((top - limit) * 1e3, 2),
+                "inserted_pattern": "".join("i" if x else "." for x in inserted),
+            }
+            batch.close()
     return result
 
 
@@ -213,6 +237,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--episodes", type=int, default=4)
     parser.add_argument("--quick", action="store_true", help="8 probes, 2 episodes")
     parser.add_argument("--json", type=Path, help="write the figures here too")
+    parser.add_argument(
+        "--parts",
+        nargs="+",
+        default=["outcomes", "capture", "forces", "episodes"],
+        choices=["outcomes", "capture", "forces", "episodes"],
+    )
     args = parser.parse_args(argv)
     if args.quick:
         args.probes, args.episodes = 8, 2
@@ -225,16 +255,19 @@ def main(argv: list[str] | None = None) -> int:
         ("hexagon", PolygonSocket(6, 1.2, 1.26)),
     ]
     report: dict = {"device": args.device, "probes_per_socket": args.probes}
-    for name, spec in sockets:
+    for name, spec in sockets if "outcomes" in args.parts else []:
         r = outcomes(pvg, name, spec, args.probes, args.seed, args.band_max, args.device)
         report[f"outcomes {name}"] = summarise(r, args.band)
         print(name, json.dumps(report[f"outcomes {name}"]), flush=True)
-    report["capture"] = capture(args.device)
-    print("capture", json.dumps(report["capture"]), flush=True)
-    report["forces"] = forces(args.device)
-    print("forces", json.dumps(report["forces"], indent=1), flush=True)
-    report["episodes"] = expert_episodes(list(range(args.episodes)), args.device)
-    print("episodes", json.dumps(report["episodes"]), flush=True)
+    parts = {
+        "capture": lambda: capture(args.device),
+        "forces": lambda: forces(args.device),
+        "episodes": lambda: expert_episodes(list(range(args.episodes)), args.device),
+    }
+    for part, measure in parts.items():
+        if part in args.parts:
+            report[part] = measure()
+            print(part, json.dumps(report[part], indent=1), flush=True)
     report["seconds"] = time.perf_counter() - start
     print(f"total {report['seconds']:.0f} s")
     if args.json:

@@ -36,11 +36,11 @@ def _assert_info_row(vector_info: dict, i: int, info: dict) -> None:
     assert set(extra) == set(info), (extra, sorted(info))
 
 
-def _compare(env_id: str, backend: str, n: int, steps: int, threads: int, fault_at=None):
+def _compare(env_id: str, backend: str, n: int, steps: int, threads: int, fault_at=None, **task):
     """Step ``n`` single envs and the vector env side by side; return what happened."""
     kwargs = {"num_threads": threads} if backend == "mujoco" else {}
-    vector = tolins.make_vec(env_id, n, backend=backend, **kwargs)
-    singles = [gym.make(env_id, backend=backend) for _ in range(n)]
+    vector = tolins.make_vec(env_id, n, backend=backend, **kwargs, **task)
+    singles = [gym.make(env_id, backend=backend, **task) for _ in range(n)]
     observations, info = vector.reset(seed=7)
     for i, env in enumerate(singles):
         single_observation, single_info = env.reset(seed=7 + i)
@@ -87,6 +87,12 @@ def test_defects_are_redrawn_per_env_as_in_the_single_env(backend) -> None:
     seen = _compare(DEFECTIVE, backend, 3, 80, threads=2)
     assert len(seen["sockets"]) >= 6  # a new bent-pin workpiece per episode and env
     assert seen["success"] >= 1 and seen["horizon"] >= 1
+
+
+@pytest.mark.parametrize("backend", ["mujoco", "kinematic"])
+def test_randomised_physics_is_drawn_per_env_as_in_the_single_env(backend) -> None:
+    seen = _compare(DEFECTIVE, backend, 3, 80, threads=2, randomization="default")
+    assert len(seen["sockets"]) >= 6 and seen["success"] >= 1
 
 
 def test_kinematic_vector_env_is_the_single_env_bit_for_bit() -> None:

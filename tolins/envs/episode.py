@@ -13,7 +13,8 @@ import gymnasium as gym
 import numpy as np
 
 from tolins.envs.backend import BackendState
-from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.initial_pose import InitialPoseDistribution, spread_pose
+from tolins.envs.randomization import PhysicsDraw, PhysicsRandomization
 from tolins.envs.reward import RewardTerms, check_reward_mode, reward_terms
 from tolins.geometry.defects import check_defect_sigma, sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
@@ -120,6 +121,8 @@ class TaskSettings:
         control_dt: Control period (s), see :func:`check_control_dt`.
         reward_mode: ``sparse`` (the paper's), ``dense`` or ``normalized_dense``
             (:mod:`tolins.envs.reward`).
+        randomization: Physics drawn per episode (:mod:`tolins.envs.randomization`), or
+            ``None`` (the paper's fixed setting).
     """
 
     socket: SocketSpec
@@ -132,6 +135,7 @@ class TaskSettings:
     initial_pose: InitialPoseDistribution | None = None
     control_dt: float = CONTROL_DT
     reward_mode: str = "sparse"
+    randomization: Any = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -162,7 +166,18 @@ class TaskSettings:
         set_(self, "initial_pose", _check_initial_pose(self.initial_pose))
         set_(self, "control_dt", check_control_dt(self.control_dt))
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
+        set_(self, "randomization", PhysicsRandomization.of(self.randomization))
+        if self.randomization is not None and self.randomization.pose_spread is not None:
+            widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
+            try:
+                _check_initial_pose(widest)
+            except ValueError as error:
+                raise ValueError(f"randomization.pose_spread: {error}") from None
         set_(self, "_noise_std", np.concatenate([self.measurement_noise, self.force_noise]))
+
+    def draw_physics(self, rng: np.random.Generator) -> PhysicsDraw | None:
+        """The episode's randomised physics (``None`` without ``randomization``)."""
+        return None if self.randomization is None else self.randomization.sample(rng)
 
     def draw_socket(self, rng: np.random.Generator) -> SocketSpec:
         """The episode's workpiece: a fresh bent-pin copy with ``defect_sigma``, else nominal."""

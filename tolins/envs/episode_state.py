@@ -22,6 +22,8 @@ import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.envs.episode import NO_SCORE, EpisodeScore, StepScore, TaskSettings
+from tolins.envs.initial_pose import spread_pose
+from tolins.envs.randomization import PhysicsDraw
 from tolins.geometry.specs import SocketSpec, workpiece_dict
 from tolins.geometry.workspace import check_goal, check_pose
 
@@ -36,6 +38,7 @@ class ResetPlan:
     socket: SocketSpec
     pose: np.ndarray
     goal: np.ndarray
+    physics: PhysicsDraw | None = None
 
 
 def check_options(options: dict[str, Any] | None) -> dict[str, Any]:
@@ -66,6 +69,7 @@ class EpisodeState:
         self.socket = settings.socket
         self.score = EpisodeScore(settings)
         self.state: BackendState | None = None
+        self.physics: PhysicsDraw | None = None
         self.observation = np.zeros(8)
         self.broken = False
 
@@ -89,14 +93,18 @@ class EpisodeState:
             goal = check_goal(options["goal"], "options['goal']") if "goal" in options else None
             goal = self._goal if goal is None else goal
             socket = self.settings.draw_socket(rng)
+            physics = self.settings.draw_physics(rng)
             if "pose" in options:
                 pose = check_pose(socket, options["pose"], "options['pose']")
             else:
-                pose = check_pose(socket, self.settings.initial_pose.sample(rng, goal))
+                distribution = self.settings.initial_pose
+                if physics is not None and physics.pose_spread is not None:
+                    distribution = spread_pose(distribution, physics.pose_spread)
+                pose = check_pose(socket, distribution.sample(rng, goal))
         except Exception:
             self.broken = True
             raise
-        return ResetPlan(socket, pose, goal)
+        return ResetPlan(socket, pose, goal, physics)
 
     def begin(
         self, plan: ResetPlan, state: BackendState, rng: np.random.Generator
@@ -104,14 +112,21 @@ class EpisodeState:
         """Start the planned episode from the backend's ``state``: the first observation
         and info (with ``info["workpiece"]``, the episode's socket as
         :func:`~tolins.geometry.specs.workpiece_dict`: its defects' ground truth)."""
-        self.socket, self.episode_goal = plan.socket, plan.goal
+        self.socket, self.episode_goal, self.physics = plan.socket, plan.goal, plan.physics
         self.state, self.broken = state, False
         self.score.reset()
-        self.observation = self.settings.observe(state, self.episode_goal, rng)
-        return self.observation.copy(), {
-            **self.info(NO_SCORE),
-            "workpiece": workpiece_dict(plan.socket),
-        }
+        self.observation = self._observe(state, rng)
+        info = {**self.info(NO_SCORE), "workpiece": workpiece_dict(plan.socket)}
+        if self.physics is not None:
+            info["physics"] = self.physics.to_info()
+        return self.observation.copy(), info
+
+    def _observe(self, state: BackendState, rng: np.random.Generator) -> np.ndarray:
+        """The observation of ``state``, with the episode's drawn sensor bias and noise."""
+        observation = self.settings.observe(state, self.episode_goal, rng)
+        if self.physics is not None:
+            observation = self.physics.observe(observation, rng)
+        return observation
 
     def check_running(self) -> None:
         """``gymnasium.error.ResetNeeded`` unless an episode is running."""
@@ -143,7 +158,7 @@ class EpisodeState:
             return self.observation.copy(), 0.0, False, True, info
         self.state = state
         score = self.score.score(state, self.socket)
-        self.observation = self.settings.observe(state, self.episode_goal, rng)
+        self.observation = self._observe(state, rng)
         info = self.info(score)
         return self.observation.copy(), score.reward, score.success, score.truncated, info
 

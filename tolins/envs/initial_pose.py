@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,3 +52,14 @@ class InitialPoseDistribution:
         z = rng.uniform(self.z_min, self.z_max)
         offset = np.array([radius * np.cos(direction), radius * np.sin(direction), theta])
         return np.append(np.asarray(goal, dtype=float) + offset, z)
+
+
+def spread_pose(distribution: InitialPoseDistribution, factor: float) -> InitialPoseDistribution:
+    """``distribution`` with its horizontal offsets and theta range scaled by ``factor``
+    (the randomised initial-pose spread, :mod:`tolins.envs.randomization`)."""
+    return dataclasses.replace(
+        distribution,
+        radius_min=distribution.radius_min * factor,
+        radius_max=distribution.radius_max * factor,
+        theta_max=distribution.theta_max * factor,
+    )

@@ -114,9 +114,13 @@ class InsertionEnv(gym.Env):
     ``options={"pose": [x, y, theta, z]}``; ``options={"goal": [x*, y*, θ*]}`` moves
     the goal of that episode only (gymnasium's convention: options apply to one reset;
     ``env.goal = ...`` moves it for the running episode and the later ones). With
-    ``defect_sigma``,
-    every reset draws a new bent-pin workpiece (per-pin offsets ~ N(0, sigma² I), mm)
-    from the nominal circular ``socket``. ``reset`` validates every option before it
+    ``defect_sigma``, every reset draws a new bent-pin workpiece (per-pin offsets ~ N(0,
+    sigma² I), mm) from the nominal circular ``socket``. ``randomization`` (``None`` by
+    default: the paper's fixed physics; ``"default"``, a dict of ranges or a
+    :class:`~tolins.envs.randomization.PhysicsRandomization`) draws friction, contact
+    stiffness, servo gains and force limit, force-sensor bias and noise and the
+    initial-pose spread per episode, after the workpiece and before the pose; the values
+    are in the reset's ``info["physics"]``. ``reset`` validates every option before it
     changes anything: a failed reset raises ``ValueError``, leaves the episode as it
     was, and ``step`` raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
 
@@ -157,6 +161,7 @@ class InsertionEnv(gym.Env):
         defect_sigma: float | None = None,
         initial_pose: InitialPoseDistribution | None = None,
         reward_mode: str = "sparse",
+        randomization: Any = None,
         render_mode: str | None = None,
     ) -> None:
         if backend not in BACKENDS:
@@ -174,6 +179,7 @@ class InsertionEnv(gym.Env):
             initial_pose=initial_pose,
             reward_mode=reward_mode,
             control_dt=control_dt,
+            randomization=randomization,
         )
         self.backend_name = backend
         self.control_dt = self.settings.control_dt
@@ -193,6 +199,7 @@ class InsertionEnv(gym.Env):
     defect_sigma = _setting("defect_sigma")
     initial_pose = _setting("initial_pose")
     reward_mode = _setting("reward_mode")
+    randomization = _setting("randomization")
 
     @property
     def goal(self) -> np.ndarray:
@@ -217,6 +224,8 @@ class InsertionEnv(gym.Env):
         if plan.socket is not self.backend.spec:
             self.backend = BACKENDS[self.backend_name](plan.socket, self.control_dt)
             self.close()
+        if self.settings.randomization is not None and isinstance(self.backend, MujocoBackend):
+            self.backend.set_physics(plan.physics)
         return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

@@ -36,6 +36,9 @@ class KinematicBatchPhysics:
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         self._sockets[index] = socket
 
+    def set_physics(self, index: int, draw: object) -> None:
+        """Nothing: the kinematic model has no friction, stiffness or servos."""
+
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
         self._pose[ids] = poses

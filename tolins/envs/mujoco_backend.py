@@ -14,6 +14,7 @@ import numpy as np
 
 from tolins.envs.backend import BackendState
 from tolins.envs.episode import check_control_dt
+from tolins.envs.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import make_mjcf
@@ -261,6 +262,16 @@ class MujocoBackend:
         check_int("contact_checks", contact_checks, minimum=1, maximum=substeps)
         self.substeps = substeps
         self.stepper = ServoStepper(self.model, self.data, contact_checks)
+        self._nominal: dict[str, np.ndarray] | None = None
+
+    def set_physics(self, draw: PhysicsDraw | None) -> None:
+        """Apply a randomised-physics ``draw`` to the model (from its nominal values;
+        ``None``: nominal), before a reset."""
+        if self._nominal is None:
+            if draw is None:
+                return
+            self._nominal = nominal_fields(self.model)
+        apply_draw(self.model, self._nominal, draw or PhysicsDraw())
 
     def pin_forces(self) -> np.ndarray:
         """Summed normal contact force on each pin now (N), ``(n_pins,)``."""

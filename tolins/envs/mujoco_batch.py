@@ -15,6 +15,7 @@ compile for it. All models of a socket family share one layout.
 
 from __future__ import annotations
 
+import copy
 import os
 
 import mujoco
@@ -35,6 +36,7 @@ from tolins.envs.mujoco_backend import (
     pin_touch_points,
     simulation_fault,
 )
+from tolins.envs.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import make_mjcf
@@ -114,6 +116,18 @@ class MujocoBatch:
             return
         self._sockets[index] = socket
         self._models[index] = self._compile(socket)
+        self._models_changed = True
+
+    def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
+        """Run simulation ``index`` on its workpiece's model with a randomised-physics
+        ``draw`` applied (a copy of its own; ``None``: the workpiece's model)."""
+        base = self._compile(self._sockets[index])
+        if draw is None or not draw.changes_model:
+            self._models[index] = base
+        else:
+            model = copy.copy(base)
+            apply_draw(model, nominal_fields(base), draw)
+            self._models[index] = model
         self._models_changed = True
 
     def _compile(self, socket: SocketSpec) -> mujoco.MjModel:

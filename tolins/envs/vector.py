@@ -88,7 +88,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         goal: The goal of every env, as ``InsertionEnv``'s.
         **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
             ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
-            ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``).
+            ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``,
+            ``randomization``).
 
     ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
     masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
@@ -131,6 +132,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.physics = make_batch_physics(
             backend, socket, self.num_envs, self.settings.control_dt, num_threads, device
         )
+        if self.settings.randomization is not None and not hasattr(self.physics, "set_physics"):
+            raise ValueError(f"randomization is not supported on backend={backend!r}")
         self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -239,6 +242,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         ``ids`` set) and each one's info."""
         for i, plan in zip(ids, plans, strict=True):
             self.physics.set_socket(int(i), plan.socket)
+            if self.settings.randomization is not None:
+                self.physics.set_physics(int(i), plan.physics)
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):

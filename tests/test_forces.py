@@ -4,6 +4,7 @@ from the single-env loop and the vector-env runner, and in results.json (schema 
 from __future__ import annotations
 
 import json
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -131,3 +132,35 @@ def test_an_episode_round_trips_through_json():
     episode = _episodes([2.5])[0]
     assert episode_from_dict(json.loads(json.dumps(asdict(episode)))) == episode
     assert episode_from_dict(asdict(Episode(1.0, False, 40, 3))) == Episode(1.0, False, 40, 3)
+
+
+def test_evaluate_prints_and_writes_the_force_figures(tmp_path, capsys):
+    from tolins.cli import main
+
+    argv = ["evaluate", "--policy", "efficient", "--env", ENV, "--episodes", "3"]
+    assert main([*argv, "--backend", "kinematic", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "| ID | policy | eval env | peak force (N) | force in contact (N) |" in printed
+    assert re.search(r"\| efficient \| efficient \| Circle2x2-v1 \| 1\.00 ± 0\.00 \|", printed)
+    document = read_results(tmp_path)
+    assert document["schema"] == SCHEMA
+    entry = document["rows"]["efficient"]
+    assert len(entry["impulse_per_episode"][0]) == 3 and entry["jams_mean"] == 0.0
+
+
+def test_the_force_table_and_panel_show_rows_that_have_the_figures(tmp_path):
+    from tolins.bench.force_table import format_force_table
+    from tolins.bench.plots import plot_table
+    from tolins.bench.table import PAPER
+
+    with_forces = row_entry(ROWS[0], [_episodes([1.0, 3.0])])
+    without = row_entry(ROWS[1], [[Episode(1.0, True, 30, 0)]])
+    table = format_force_table({"C1.1": with_forces, "C1.2": without})
+    assert table.count("\n") == 2 and "| C1.1 |" in table and "C1.2" not in table
+    assert "| 2.00 ± 1.00 | 1.00 ± 0.50 | 0.50 ± 0.25 | 0.50 ± 0.50 | 7.50 ± 0.00 |" in table
+    assert format_force_table({"C1.2": without}) == ""
+    three = plot_table(tmp_path / "forces.png", {"C1.1": with_forces}, PAPER)
+    two = plot_table(tmp_path / "plain.png", {"C1.2": without}, PAPER)
+    from PIL import Image
+
+    assert Image.open(three).size[1] > Image.open(two).size[1]  # the third panel

@@ -151,6 +151,11 @@ def _evaluate(args: argparse.Namespace) -> int:
     if rows:
         print(f"\nreference rows on {args.env}, from {source}:")
         print(format_rows(rows))
+    from tolins.bench.force_table import format_force_table
+
+    forces = format_force_table({name: entry, **rows})
+    if forces:
+        print(f"\ncontact forces (tolins.rollouts.forces):\n{forces}")
     print(
         f"\n{entry['episodes']} episodes (seeds 10000…), {args.backend} backend, "
         f"{entry['faults']} simulator faults"

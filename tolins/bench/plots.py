@@ -38,14 +38,28 @@ def plot_table(
 ) -> Path:
     """Reward and success rate of every row, this run (with the 95 % CI of its mean,
     ``{figure}_ci``; ± standard error for entries without one) beside the paper (± its
-    std over runs)."""
+    std over runs); with the force figures (schema /2) a third panel of each row's peak
+    and mean in-contact force."""
 
     plt = _pyplot()
     rows = list(results)
     x = np.arange(len(rows))
     over = next(iter(results.values()), {}).get("ci_over", "episodes")
-    figure, axes = plt.subplots(2, 1, figsize=(max(6, 0.7 * len(rows) + 2), 6), sharex=True)
-    for axis, figure_name in zip(axes, ("reward", "success"), strict=True):
+    forces = bool(rows) and all("peak_force_mean" in results[r] for r in rows)
+    panels = 3 if forces else 2
+    figure, axes = plt.subplots(
+        panels, 1, figsize=(max(6, 0.7 * len(rows) + 2), 3 * panels), sharex=True
+    )
+    if forces:  # the paper reports no forces: this run's peak and in-contact force only
+        peak = [results[r]["peak_force_mean"] for r in rows]
+        contact = [results[r]["contact_force_mean"] for r in rows]
+        peak_error = [standard_error(results[r], "peak_force") for r in rows]
+        axes[2].bar(x - 0.2, peak, 0.4, yerr=peak_error, label="peak force (± s.e.)", capsize=2)
+        axes[2].bar(x + 0.2, contact, 0.4, label="mean force in contact", alpha=0.7)
+        axes[2].set_ylabel("contact force (N)")
+        axes[2].grid(axis="y", alpha=0.3)
+        axes[2].legend()
+    for axis, figure_name in zip(axes[:2], ("reward", "success"), strict=True):
         ours = [results[r][f"{figure_name}_mean"] for r in rows]
         ours_error = np.array([_error_bar(results[r], figure_name) for r in rows]).T
         theirs = [paper[r][figure_name][0] if r in paper else np.nan for r in rows]
@@ -56,7 +70,7 @@ def plot_table(
         axis.set_ylabel("success rate" if figure_name == "success" else "reward")
         axis.grid(axis="y", alpha=0.3)
     axes[0].legend()
-    axes[1].set_xticks(x, rows)
+    axes[-1].set_xticks(x, rows)
     figure.tight_layout()
     return _save(figure, path)
 

@@ -267,6 +267,7 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "",
         "![reward and success beside the paper](table.png)",
         "",
+        *_force_section(run.results),
         "## The paper's claims in this run",
         "",
         _VERDICT_RULE,
@@ -306,6 +307,14 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "",
     ]
     return "\n".join(parts)
+
+
+def _force_section(results: dict[str, dict[str, Any]]) -> list[str]:
+    """``results.md``'s "Contact forces" section (nothing when no row has the figures)."""
+    from tolins.bench.force_table import FORCE_NOTE, format_force_table
+
+    table = format_force_table(results)
+    return ["## Contact forces", "", FORCE_NOTE, "", table, ""] if table else []
 
 
 _VERDICT_RULE = (

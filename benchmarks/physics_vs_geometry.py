@@ -6,6 +6,12 @@ Usage::
     python benchmarks/physics_vs_geometry.py --quick       # under 30 s, a smoke test
     python benchmarks/physics_vs_geometry.py --probes 200 --seed 3 --no-slow
     python benchmarks/physics_vs_geometry.py --hole-sides 32   # experiment: finer round holes
+    python benchmarks/physics_vs_geometry.py --grade 20    # 2*2, 2*8, square, hexagon at 20 µm
+
+``--grade UM`` probes the 2*2 and 2*8 sockets and the square and hexagon pegs with their
+holes resized to a radial clearance of UM µm (``tolins.geometry.specs.with_clearance``,
+the tolerance-grade presets of issue 22), the band ±5 % of the clearance and the offsets
+±25 % of it unless ``--band`` / ``--band-max`` say otherwise.
 
 For each socket, ``--probes`` random poses ``[x, y, theta]`` near the boundary of the
 exact tolerance (:func:`tolins.tolerance.contains`) are dropped into the MuJoCo env
@@ -67,7 +73,7 @@ import tolins
 from tolins import CircularSocket, PolygonSocket
 from tolins.envs import InsertionEnv
 from tolins.geometry import specs as specs_module
-from tolins.geometry.specs import polygon_vertices
+from tolins.geometry.specs import polygon_vertices, with_clearance
 from tolins.mjcf import model as model_module
 from tolins.tolerance import contains, extents
 
@@ -83,6 +89,20 @@ class Socket:
     name: str
     family: str
     spec: object
+
+
+def graded_sockets(grade_um: float) -> list[Socket]:
+    """The sockets of a tolerance grade: 2*2, 2*8, square and hexagon at ``grade_um`` µm."""
+    bases = [
+        ("2*2", "circle", CircularSocket(2, 2)),
+        ("2*8", "circle", CircularSocket(2, 8)),
+        ("square", "polygon", PolygonSocket(4, 1.5, 1.65)),
+        ("hexagon", "polygon", PolygonSocket(6, 1.2, 1.26)),
+    ]
+    return [
+        Socket(f"{name} fit{grade_um:g}", family, with_clearance(spec, grade_um * 1e-3))
+        for name, family, spec in bases
+    ]
 
 
 def sockets(seed: int) -> list[Socket]:
@@ -398,8 +418,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true", help="a smoke test (< 30 s)")
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--band", type=float, default=10.0, help="half-width (µm) of the band")
-    parser.add_argument("--band-max", type=float, default=50.0, help="largest offset (µm)")
+    parser.add_argument("--band", type=float, help="half-width (µm) of the band (default 10)")
+    parser.add_argument("--band-max", type=float, help="largest offset (µm) (default 50)")
+    parser.add_argument("--grade", type=float, help="radial clearance (µm) of graded sockets")
     parser.add_argument("--directions", type=int, default=96, help="for the distance search")
     parser.add_argument("--no-slow", action="store_true", help="skip the 0.5 mm/s push")
     parser.add_argument("--only", nargs="*", help="socket names to run (default: all)")
@@ -408,6 +429,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.quick:
         args.probes, args.directions, args.no_slow = min(args.probes, 24), 32, True
+    if args.band is None:
+        args.band = 10.0 if args.grade is None else 0.05 * args.grade
+    if args.band_max is None:
+        args.band_max = 50.0 if args.grade is None else 0.25 * args.grade
     apply_model_changes(args.hole_sides)
     started = time.perf_counter()
     print(
@@ -417,7 +442,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{platform.python_version()}, MuJoCo {mujoco.__version__}, NumPy {np.__version__}, "
         f"{os.cpu_count()} CPUs"
     )
-    selected = [s for s in sockets(args.seed) if not args.only or s.name in args.only]
+    pool_of = sockets(args.seed) if args.grade is None else graded_sockets(args.grade)
+    selected = [s for s in pool_of if not args.only or s.name in args.only]
     speeds = [FAST] if args.no_slow else [FAST, SLOW]
     rows, all_ok = [], True
     with concurrent.futures.ThreadPoolExecutor(args.workers) as pool:

@@ -11,7 +11,7 @@ from dm_control.utils import containers
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
 from tolins.envs.episode import check_control_dt
-from tolins.envs.tasks import TASKS, Task
+from tolins.envs.tasks import PRESETS, Task
 from tolins.paper import CONTROL_DT
 
 TASK_NAME = "insert"
@@ -52,7 +52,7 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
 
 
 #: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``).
-SUITES: dict[str, containers.TaggedTasks] = {task.domain: _domain_suite(task) for task in TASKS}
+SUITES: dict[str, containers.TaggedTasks] = {t.domain: _domain_suite(t) for t in PRESETS}
 
 
 def get_tasks(tag: str | None = None) -> tuple[tuple[str, str], ...]:
@@ -68,6 +68,7 @@ ALL_TASKS = get_tasks()
 PAPER = get_tasks("paper")
 CIRCLE = get_tasks("circle")
 POLYGON = get_tasks("polygon")
+GRADE = get_tasks("grade")
 DEFECTIVE = get_tasks("defective")
 #: Domain -> its task names.
 TASKS_BY_DOMAIN = {domain: tuple(suite) for domain, suite in SUITES.items()}

@@ -7,7 +7,13 @@ from typing import Any
 
 import gymnasium as gym
 
-from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.geometry.specs import (
+    GRADES_UM,
+    CircularSocket,
+    PolygonSocket,
+    SocketSpec,
+    with_clearance,
+)
 
 ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
 #: The batched env of every id (``gymnasium.make_vec(..., vectorization_mode=
@@ -74,14 +80,40 @@ TASKS: tuple[Task, ...] = (
     _polygon("Pentagon", 5, 1.5, 1.65),
     _polygon("Hexagon", 6, 1.2, 1.26),
 )
+
+
+def _grade(task: Task, clearance_um: int) -> Task:
+    """``task``'s workpiece with its holes resized to a radial clearance of
+    ``clearance_um`` µm (:func:`~tolins.geometry.specs.with_clearance`, pins unchanged)."""
+    family = task.socket.family
+    return Task(
+        name=f"{task.name}Fit{clearance_um}",
+        domain=f"{task.domain}_fit{clearance_um}",
+        socket=with_clearance(task.socket, clearance_um * 1e-3),
+        tags=("grade", family, f"fit{clearance_um}"),
+    )
+
+
+#: Tolerance grades (issue 22): the 2*2 and 2*8 sockets and the square and hexagon pegs at
+#: radial clearances of 100, 50 and 20 µm (the paper's are 200, 200, 106 and 52 µm), the
+#: physics step following the grade (:data:`~tolins.mjcf.model.GRADE_TIMESTEPS`).
+GRADE_TASKS: tuple[Task, ...] = tuple(
+    _grade(task, um)
+    for task in TASKS
+    if task.name in ("Circle2x2", "Circle2x8", "Square", "Hexagon")
+    for um in GRADES_UM[1:]
+)
+#: Every preset: the paper's (``TASKS``), then the grades; gymnasium ids and dm_control
+#: domains are registered for each.
+PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
 #: The generic id; pass ``socket=`` (and any other keyword) to ``gymnasium.make``.
 GENERIC_ID = "tolins/Insert-v1"
 
 
 def register_envs() -> None:
-    """Register every task (and the generic id) with gymnasium; safe to call twice."""
+    """Register every preset (and the generic id) with gymnasium; safe to call twice."""
     entry_points = {"entry_point": ENTRY_POINT, "vector_entry_point": VECTOR_ENTRY_POINT}
-    for task in TASKS:
+    for task in PRESETS:
         if task.gym_id not in gym.registry:
             gym.register(id=task.gym_id, kwargs=task.env_kwargs, **entry_points)
     if GENERIC_ID not in gym.registry:

@@ -378,6 +378,23 @@ class PolygonSocket:
 SocketSpec = CircularSocket | PolygonSocket
 
 
+#: The tolerance grades of the presets: radial (face-to-face) clearances in µm.
+GRADES_UM = (200, 100, 50, 20)
+
+
+def with_clearance(spec: SocketSpec, clearance: float) -> SocketSpec:
+    """``spec`` (nominal) with its holes resized to a radial clearance of ``clearance`` mm,
+    pins unchanged: a round hole of radius ``pin_radius + clearance``, a polygon hole whose
+    faces lie ``clearance`` beyond the peg's (``spec.clearance == clearance``)."""
+    clearance = check_positive("clearance", clearance)
+    if isinstance(spec, CircularSocket):
+        return dataclasses.replace(spec.nominal(), hole_radius=spec.pin_radius + clearance)
+    if isinstance(spec, PolygonSocket):
+        grow = clearance / math.cos(math.pi / spec.sides)
+        return dataclasses.replace(spec, hole_circumradius=spec.pin_circumradius + grow)
+    raise ValueError(f"spec={spec!r}; allowed: a CircularSocket or PolygonSocket")
+
+
 def workpiece_dict(spec: SocketSpec) -> dict[str, object]:
     """``spec`` as JSON-ready data, the ground truth of an episode's workpiece:
     ``{"type": "CircularSocket", "rows": 2, ..., "pin_offsets": [[dx, dy], ...] or None,

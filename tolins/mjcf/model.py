@@ -51,6 +51,15 @@ from tolins.paper import A_MAX
 #: 0.004) pins 7 µm beyond the clearance in x and 35 µm beyond it in rotation went in;
 #: with 1 ms (solref 0.002) 2 µm and 2 µm (see docs/environments.md).
 TIMESTEP = 0.001
+#: The physics step of each tolerance grade: ``(smallest radial clearance in mm, step in
+#: s)``, the first row whose clearance the spec's nominal clearance reaches. The capture
+#: beyond the clearance is about the travel of one step at 2.5 mm/s: 2.1–2.6 µm at 1 ms
+#: (x and theta), 1.0 µm at 0.5 ms, 0.2 µm at 0.25 ms (2*2 socket at 20 µm: 11.9 %,
+#: 5.0 %, 1.1 % of it), so the step halves below 51 µm (the paper's hexagon, 52 µm, keeps
+#: 1 ms) and halves again below 30 µm; the capture stays within 5 % of the clearance
+#: (``benchmarks/grades.py``, benchmarks/README.md). Contact ``solref`` follows the step
+#: (:func:`contact_solref`).
+GRADE_TIMESTEPS = ((0.051, TIMESTEP), (0.03, 0.0005), (0.0, 0.00025))
 BOARD_THICKNESS = 3.0
 #: Board (mm) beyond the farthest place a pin can reach.
 BOARD_OVERHANG = 1.0
@@ -69,6 +78,20 @@ HINGE_KP = 2.0e8
 SOLREF = "0.002 1"
 SOLIMP = "0.99 0.999 0.01"
 FRICTION = 0.3
+
+
+def physics_timestep(spec: SocketSpec) -> float:
+    """The model's physics step (s) for ``spec``'s tolerance grade (:data:`GRADE_TIMESTEPS`,
+    by the nominal radial clearance): 1 ms from 51 µm up, so every preset of the paper
+    keeps its 1 ms."""
+    clearance = spec.nominal().clearance if isinstance(spec, CircularSocket) else spec.clearance
+    return next(step for minimum, step in GRADE_TIMESTEPS if clearance >= minimum)
+
+
+def contact_solref(timestep: float) -> str:
+    """Contact ``solref``: a time constant of two physics steps, critically damped
+    (:data:`SOLREF` at the 1 ms step)."""
+    return SOLREF if timestep == TIMESTEP else f"{num(2 * timestep)} 1"
 
 
 def cell_half_width(spec: SocketSpec) -> float:
@@ -282,13 +305,15 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False) -> str:
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
     pairs = _contact_pairs(spec) if contact_pairs else []
+    timestep = physics_timestep(spec)
+    solref = contact_solref(timestep)
     # With pairs, the pins take no part in automatic collision; a pair's contact
     # parameters are what the two geoms' defaults mix to (friction: the larger of each).
     pin_bits = 'contype="0" conaffinity="0"' if contact_pairs else 'contype="2" conaffinity="1"'
     pair_default = (
         [
             f'<pair condim="3" friction="{nums((FRICTION, FRICTION, 0.005, 0.0001, 0.0001))}" '
-            f'solref="{SOLREF}" solimp="{SOLIMP}" margin="0" gap="0"/>'
+            f'solref="{solref}" solimp="{SOLIMP}" margin="0" gap="0"/>'
         ]
         if contact_pairs
         else []
@@ -299,7 +324,7 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False) -> str:
     lines = [
         f'<mujoco model="tolins_{spec.family}">',
         '<compiler angle="radian" autolimits="true"/>',
-        f'<option timestep="{num(TIMESTEP)}" integrator="implicitfast" solver="Newton" '
+        f'<option timestep="{num(timestep)}" integrator="implicitfast" solver="Newton" '
         'tolerance="1e-10" cone="elliptic" gravity="0 0 0">',
         '<flag multiccd="disable"/>',
         "</option>",
@@ -307,7 +332,7 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False) -> str:
         '<visual><global offwidth="1280" offheight="960"/>'
         '<headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/></visual>',
         "<default>",
-        f'<geom solref="{SOLREF}" solimp="{SOLIMP}" friction="{num(FRICTION)} 0.005 0.0001" '
+        f'<geom solref="{solref}" solimp="{SOLIMP}" friction="{num(FRICTION)} 0.005 0.0001" '
         'condim="3" margin="0" gap="0"/>',
         *pair_default,
         '<default class="board">',

@@ -1,0 +1,86 @@
+"""Tolerance grades (issue 22): presets at 100, 50 and 20 µm whose physics step follows the
+grade, and a few poses per grade that insert inside the clearance and are blocked just
+beyond its 5 % band (the full table: ``benchmarks/grades.py``)."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import mujoco
+import pytest
+from rollouts import push_down
+
+import tolins
+from tolins import CircularSocket, PolygonSocket
+from tolins.envs.tasks import GRADE_TASKS, TASKS
+from tolins.geometry.specs import GRADES_UM, with_clearance
+from tolins.mjcf import make_mjcf
+from tolins.mjcf.model import TIMESTEP, physics_timestep
+
+BASES = {
+    "Circle2x2": CircularSocket(2, 2),
+    "Circle2x8": CircularSocket(2, 8),
+    "Square": PolygonSocket(4, 1.5, 1.65),
+    "Hexagon": PolygonSocket(6, 1.2, 1.26),
+}
+
+
+@pytest.mark.parametrize("um", GRADES_UM)
+def test_with_clearance_resizes_the_holes_only(um) -> None:
+    c = um * 1e-3
+    circle = with_clearance(CircularSocket(2, 8), c)
+    assert circle.pin_radius == 0.3 and circle.hole_radius == pytest.approx(0.3 + c)
+    square = with_clearance(PolygonSocket(4, 1.5, 1.65), c)
+    # Face distance of a square: circumradius / √2.
+    assert (square.hole_circumradius - 1.5) / math.sqrt(2) == pytest.approx(c)
+    hexagon = with_clearance(PolygonSocket(6, 1.2, 1.26), c)
+    assert (hexagon.hole_circumradius - 1.2) * math.sqrt(3) / 2 == pytest.approx(c)
+
+
+def test_the_paper_presets_keep_the_1_ms_step() -> None:
+    for task in TASKS:
+        assert physics_timestep(task.socket) == TIMESTEP
+    assert physics_timestep(tolins.sample_defects(CircularSocket(2, 1), 0.12, 0)) == TIMESTEP
+
+
+@pytest.mark.parametrize("task", GRADE_TASKS, ids=lambda t: t.name)
+def test_grade_presets_are_registered_with_their_step(task) -> None:
+    base = task.name.split("Fit")[0]
+    um = int(task.name.split("Fit")[1])
+    assert task.socket == with_clearance(BASES[base], um * 1e-3)
+    assert {"grade", f"fit{um}", task.socket.family} <= set(task.tags)
+    env = gym.make(task.gym_id).unwrapped
+    assert env.nominal_socket == task.socket
+    model = mujoco.MjModel.from_xml_string(make_mjcf(task.socket))
+    expected = {100: 0.001, 50: 0.0005, 20: 0.00025}[um]
+    assert model.opt.timestep == expected
+    assert model.geom_solref[0, 0] == pytest.approx(2 * expected)
+
+
+# (preset, axis of [x, y, theta], limit: the clearance along x, or the rotation limit)
+CASES = [
+    (f"{base}Fit{um}", axis)
+    for um in (100, 50, 20)
+    for base in ("Circle2x2", "Square", "Hexagon")
+    for axis in ((0, 2) if base == "Circle2x2" else (0,))
+] + [("Circle2x8Fit20", 0)]
+
+
+def _limit(spec, axis: int) -> float:
+    return (
+        tolins.tolerance.extents(spec).x[1]
+        if axis == 0
+        else tolins.tolerance.extents(spec).theta[1]
+    )
+
+
+@pytest.mark.parametrize(("name", "axis"), CASES)
+def test_inside_inserts_and_beyond_the_band_is_blocked(name, axis) -> None:
+    task = next(t for t in GRADE_TASKS if t.name == name)
+    limit = _limit(task.socket, axis)
+    for share, inserts in ((0.9, True), (1.06, False)):
+        pose = [0.0, 0.0, 0.0, 0.05]
+        pose[axis] = share * limit
+        infos = push_down(task.socket, pose, steps=5)
+        assert infos[-1]["success"] == inserts, (share, infos[-1]["pose"])

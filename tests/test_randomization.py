@@ -95,3 +95,21 @@ def test_bad_ranges_are_refused_naming_the_field(value, match) -> None:
 def test_the_default_ranges_are_valid_ranges() -> None:
     assert PhysicsRandomization.of("default") is DEFAULT_RANDOMIZATION
     assert PhysicsRandomization(**vars(DEFAULT_RANDOMIZATION)) == DEFAULT_RANDOMIZATION
+
+
+def test_dm_control_draws_what_the_gym_env_draws() -> None:
+    from tolins import dmc
+
+    kwargs = {"randomization": "default", "measurement_noise": 0.0}
+    env = dmc.load("circle2x2", "insert", task_kwargs={**kwargs, "random": 4})
+    timestep = env.reset()
+    gym_env = gym.make(ENV, **kwargs)
+    observation, info = gym_env.reset(seed=4)
+    assert env.task.physics_draw.to_info() == info["physics"]
+    flat = np.concatenate([np.ravel(v) for v in timestep.observation.values()])
+    np.testing.assert_array_equal(np.sort(flat), np.sort(observation))
+    for _ in range(3):
+        timestep = env.step([0.0, 0.0, 0.0, -2.5])
+        observation, *_ = gym_env.step([0.0, 0.0, 0.0, -2.5])
+    flat = np.concatenate([np.ravel(v) for v in timestep.observation.values()])
+    np.testing.assert_array_equal(np.sort(flat), np.sort(observation))

@@ -11,6 +11,7 @@ from dm_control import mujoco as dm_mujoco
 
 from tolins.envs.backend import BackendState
 from tolins.envs.mujoco_backend import ServoStepper
+from tolins.envs.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
 
@@ -60,6 +61,16 @@ class InsertionPhysics(dm_mujoco.Physics):
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
         self.reload_from_xml_string(make_mjcf(spec))
+
+    def set_physics(self, draw: PhysicsDraw | None) -> None:
+        """Apply a randomised-physics ``draw`` to the model from its nominal values
+        (``None``: nominal; :mod:`tolins.envs.randomization`)."""
+        model = self.model.ptr
+        if getattr(self, "_nominal_of", None) is not model:
+            if draw is None:
+                return
+            self._nominal_of, self._nominal = model, nominal_fields(model)
+        apply_draw(model, self._nominal, draw or PhysicsDraw())
 
     def set_pose(self, pose: np.ndarray) -> BackendState:
         """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""

@@ -11,8 +11,9 @@ from dm_control.rl import control
 from dm_env import specs
 
 from tolins.dmc.physics import InsertionPhysics
+from tolins.envs.backend import BackendState
 from tolins.envs.episode import NO_SCORE, EpisodeScore, TaskSettings, check_action
-from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.initial_pose import InitialPoseDistribution, spread_pose
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.workspace import check_goal, check_pose
 from tolins.paper import A_MAX, HORIZON, POSE_NOISE_STD
@@ -67,6 +68,9 @@ class Insert(control.Task):
     rebuilt from its MJCF (``InsertionPhysics.reload_from_spec``, about 5 ms). A fixed
     ``pose`` below the board's top (pins in their holes) is for a nominal workpiece only:
     with ``defect_sigma`` it is refused, as a bent workpiece may not fit there.
+    ``randomization`` draws the episode's physics as the gym env's does (after the
+    workpiece, before the pose; :mod:`tolins.envs.randomization`), applied to the physics'
+    model; the draw is :attr:`physics_draw`.
 
     **Failed reset**: a reset validates the episode (workpiece, pose) before it changes
     anything; if it raises (e.g. a ``pose`` set on the task since that is out of range),
@@ -88,6 +92,7 @@ class Insert(control.Task):
         success_depth: float = 1.0,
         collision_force: float = 0.5,
         reward_mode: str = "sparse",
+        randomization: Any = None,
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -100,8 +105,10 @@ class Insert(control.Task):
             defect_sigma=defect_sigma,
             initial_pose=initial_pose,
             reward_mode=reward_mode,
+            randomization=randomization,
         )
         self.socket = socket
+        self.physics_draw = None
         self.goal = check_goal(goal)
         self.pose = None if pose is None else check_pose(socket, pose)
         if self.pose is not None and self.pose[3] < 0 and defect_sigma is not None:
@@ -123,20 +130,26 @@ class Insert(control.Task):
         random_state = self.random.bit_generator.state
         try:
             socket = self.settings.draw_socket(self.random)
+            draw = self.settings.draw_physics(self.random)
             if self.pose is not None:
                 pose = check_pose(socket, self.pose)
             else:
-                pose = check_pose(socket, self.settings.initial_pose.sample(self.random, self.goal))
+                distribution = self.settings.initial_pose
+                if draw is not None and draw.pose_spread is not None:
+                    distribution = spread_pose(distribution, draw.pose_spread)
+                pose = check_pose(socket, distribution.sample(self.random, self.goal))
         except BaseException:
             self.random.bit_generator.state = random_state
             self._reset_failed = True
             raise
         if socket is not self.socket:
             physics.reload_from_spec(socket)
-        self.socket = socket
+        self.socket, self.physics_draw = socket, draw
+        if self.settings.randomization is not None:
+            physics.set_physics(draw)
         self.score.reset()
         self.last_score, self.error = NO_SCORE, None
-        self._observation = self.settings.observe(physics.set_pose(pose), self.goal, self.random)
+        self._observation = self._observe(physics.set_pose(pose))
         self._reset_failed = False
 
     def before_step(self, action: Any, physics: InsertionPhysics) -> None:
@@ -156,7 +169,15 @@ class Insert(control.Task):
             self.last_score = self.score.fault()
             return
         self.last_score = self.score.score(state, self.socket)
-        self._observation = self.settings.observe(state, self.goal, self.random)
+        self._observation = self._observe(state)
+
+    def _observe(self, state: BackendState) -> np.ndarray:
+        """The observation of ``state`` with the episode's drawn sensor bias and noise (as
+        the gym env's :class:`~tolins.envs.episode_state.EpisodeState`)."""
+        observation = self.settings.observe(state, self.goal, self.random)
+        if self.physics_draw is not None:
+            observation = self.physics_draw.observe(observation, self.random)
+        return observation
 
     def get_observation(self, physics: InsertionPhysics) -> Observation:
         """The last observation, split into ``pose_error``, ``height`` and ``wrench``."""

@@ -142,6 +142,7 @@ def test_evaluate_prints_and_writes_the_force_figures(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "| ID | policy | eval env | peak force (N) | force in contact (N) |" in printed
     assert re.search(r"\| efficient \| efficient \| Circle2x2-v1 \| 1\.00 ± 0\.00 \|", printed)
+    assert (tmp_path / "force_profile.png").stat().st_size > 1000
     document = read_results(tmp_path)
     assert document["schema"] == SCHEMA
     entry = document["rows"]["efficient"]
@@ -164,3 +165,42 @@ def test_the_force_table_and_panel_show_rows_that_have_the_figures(tmp_path):
     from PIL import Image
 
     assert Image.open(three).size[1] > Image.open(two).size[1]  # the third panel
+
+
+def test_the_profile_is_each_steps_depth_and_peak_force():
+    env = gym.make(ENV, backend="mujoco")
+    episode = run_episode(env, EXPERTS["efficient"](), seed=4)
+    assert len(episode.profile) == episode.steps
+    assert max(force for _, force in episode.profile) == episode.forces.peak_force
+    assert episode.profile[-1][0] >= env.unwrapped.success_depth  # inserted: ≥ 1 mm deep
+    env.close()
+
+
+def test_stage_episodes_with_forces_are_checked_on_reading(tmp_path):
+    from dataclasses import asdict
+
+    from tolins.bench.integrity import StageFileError, checked_episodes
+
+    episode = Episode(1.0, True, 2, 0, None, ForceScores(2.0, 1.5, 0.75, 0, 0.5), ((0.1, 1.0),) * 2)
+    rows = json.loads(json.dumps([asdict(episode), asdict(Episode(1.0, True, 30, 0))]))
+    assert checked_episodes(tmp_path, rows, 2)[0] == episode
+    rows[0]["forces"]["impulse"] = -1.0
+    with pytest.raises(StageFileError, match=r"forces\.impulse -1\.0; allowed: finite, ≥ 0"):
+        checked_episodes(tmp_path, rows, 2)
+    rows[0]["forces"]["impulse"], rows[0]["profile"] = 0.75, [[0.1, "x"]]
+    with pytest.raises(StageFileError, match="profile is not"):
+        checked_episodes(tmp_path, rows, 2)
+
+
+def test_a_row_force_profile_is_drawn_from_its_episodes(tmp_path):
+    from tolins.bench.force_plot import plot_force_profile
+
+    env = gym.make(ENV, backend="kinematic")
+    episodes = [run_episode(env, p, seed=5) for p in (EXPERTS["efficient"](), _straight_down)]
+    assert [e.success for e in episodes] == [True, False]
+    path = plot_force_profile(tmp_path / "profile.png", episodes, "C2.1")
+    assert path.stat().st_size > 1000
+    with pytest.raises(ValueError, match="without force profiles"):
+        plot_force_profile(tmp_path / "none.png", [Episode(1.0, True, 30, 0)], "old")
+    assert not (tmp_path / "none.png").exists()
+    env.close()

@@ -141,8 +141,14 @@ def _evaluate(args: argparse.Namespace) -> int:
     trust_pickle(args.trust_pickle)  # this command's choice, not an earlier call's
     try:
         source, rows = reference_rows(args.env, args.reference, backend=args.backend)
+        profile = Path(args.out) / "force_profile.png" if args.out else None
         entry = evaluate_policy(
-            args.policy, args.env, episodes=args.episodes, backend=args.backend, name=name
+            args.policy,
+            args.env,
+            episodes=args.episodes,
+            backend=args.backend,
+            name=name,
+            profile_plot=profile,
         )
     except (ValueError, FileNotFoundError) as error:
         print(f"tolins evaluate: {error}", file=sys.stderr)
@@ -161,5 +167,5 @@ def _evaluate(args: argparse.Namespace) -> int:
         f"{entry['faults']} simulator faults"
     )
     if args.out:
-        print(f"wrote {write_evaluation(args.out, name, entry, backend=args.backend)}")
+        print(f"wrote {write_evaluation(args.out, name, entry, backend=args.backend)}, {profile}")
     return 0

@@ -121,6 +121,9 @@ def _figures(run: BenchRun, trainer: Trainer, out: Path) -> list[Path]:
     for row in ROWS:
         if row.id in results:
             env_ids += [*(t for tr in row.trainings for t in tr.env_ids), row.eval_env]
+    from tolins.bench.force_plot import plot_row_profiles
+
+    written += plot_row_profiles(run.stage_folders, list(results), out)
     sockets = {t.name: t.socket for t in TASKS if t.gym_id in env_ids}
     written.append(plots.plot_tolerance_images(out / "tolerance_images.png", sockets))
     for check in run.claims:
@@ -302,6 +305,8 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "the deep-RL baselines (PPO, SAC; rows R1.x).",
         "- `trajectories.png`: π_n's trajectories over training (the paper's Fig. 4a).",
         "- `tolerance_images.png`: the tolerance images of the workpieces.",
+        "- `force_profiles/{ID}.png`: each row's normal force against insertion depth over "
+        "its evaluation episodes (training seed 0), successes and failures coloured.",
         "- `recordings/{ID}.rrd`: evaluation episodes of each row; "
         "`tolins replay recordings/C2.3.rrd`.",
         "",

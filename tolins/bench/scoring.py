@@ -28,8 +28,10 @@ def evaluate_policy(
     episodes: int = EPISODES,
     backend: str = "mujoco",
     name: str | None = None,
+    profile_plot: str | Path | None = None,
 ) -> dict[str, Any]:
-    """The ``results.json`` entry of ``policy`` on ``env_id``, evaluated like a bench row.
+    """The ``results.json`` entry of ``policy`` on ``env_id``, evaluated like a bench row
+    (and, with ``profile_plot``, its force profile drawn there: :mod:`tolins.bench.force_plot`).
 
     ``policy``: a string as ``tolins evaluate --policy`` takes it (an expert name, a tolins
     policy file, an SB3 ``PATH.zip``, ``MODULE:NAME``; :func:`tolins.learning.actors.make_actor`)
@@ -68,6 +70,10 @@ def evaluate_policy(
         policy_name=label,
         vectorized=stateless,
     )
+    if profile_plot is not None:
+        from tolins.bench.force_plot import plot_force_profile
+
+        plot_force_profile(profile_plot, episodes_run, f"{label} on {env_id}")
     return row_entry(row, [episodes_run])
 
 

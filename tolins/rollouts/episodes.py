@@ -23,8 +23,9 @@ Policy = Callable[[np.ndarray], np.ndarray]
 
 @dataclass(frozen=True)
 class Episode:
-    """What one episode came to; ``forces`` are its force-aware scores
-    (:mod:`tolins.rollouts.forces`; ``None`` in a record made before tolins 0.4)."""
+    """What one episode came to; ``forces`` are its force-aware scores and ``profile``
+    each step's ``(depth mm, peak normal force N)`` (:mod:`tolins.rollouts.forces`; both
+    ``None`` in a record made before tolins 0.4)."""
 
     reward: float
     success: bool
@@ -32,12 +33,19 @@ class Episode:
     collisions: int
     error: str | None = None
     forces: ForceScores | None = None
+    profile: tuple[tuple[float, float], ...] | None = None
 
 
 def episode_from_dict(row: dict) -> Episode:
     """The :class:`Episode` of ``dataclasses.asdict(episode)`` (as JSON gives it back)."""
-    forces = row.get("forces")
-    return Episode(**{**row, "forces": None if forces is None else ForceScores(**forces)})
+    forces, profile = row.get("forces"), row.get("profile")
+    return Episode(
+        **{
+            **row,
+            "forces": None if forces is None else ForceScores(**forces),
+            "profile": None if profile is None else tuple(tuple(p) for p in profile),
+        }
+    )
 
 
 def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episode:
@@ -57,6 +65,7 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
         int(info["n_collisions"]),
         info.get("error"),
         forces.scores(),
+        forces.profile(),
     )
 
 

@@ -65,6 +65,7 @@ class ForceTracker:
         self.control_dt, self.collision_force = float(control_dt), float(collision_force)
         self._heights = [float(z)]  # z after the reset and after each step
         self._blocked: list[bool] = []
+        self._peaks: list[float] = []
         self._peak, self._contact_sum, self._contact_steps, self._jams = 0.0, 0.0, 0, 0
         self._jammed = False
 
@@ -82,6 +83,7 @@ class ForceTracker:
         peak = float(peak_force)
         self._heights.append(float(z))
         self._blocked.append(peak > self.collision_force)
+        self._peaks.append(peak)
         self._peak = max(self._peak, peak)
         if peak > CONTACT_FORCE:
             self._contact_sum += peak
@@ -92,6 +94,11 @@ class ForceTracker:
         if jammed and not self._jammed:
             self._jams += 1
         self._jammed = jammed
+
+    def profile(self) -> tuple[tuple[float, float], ...]:
+        """Each step's ``(depth, peak_force)``: how deep the pin tips were after it (mm below
+        the board's top, ``-z``; negative above it) and its peak normal force (N)."""
+        return tuple((-z, peak) for z, peak in zip(self._heights[1:], self._peaks, strict=True))
 
     def scores(self) -> ForceScores:
         """The scores of the steps so far."""

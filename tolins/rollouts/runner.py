@@ -153,4 +153,6 @@ def _finish(slot: _Slot, infos: dict, i: int) -> tuple[Rollout, Episode]:
         collisions,
     )
     steps = int(infos["step"][i])
-    return rollout, Episode(total, success, steps, collisions, error, slot.forces.scores())
+    forces = slot.forces
+    episode = Episode(total, success, steps, collisions, error, forces.scores(), forces.profile())
+    return rollout, episode

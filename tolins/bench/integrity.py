@@ -101,6 +101,10 @@ def checked_episodes(path: Path, rows: Any, count: int) -> list[Episode]:
     return episodes
 
 
+def _finite_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def _forces_problem(forces: Any, steps: Any) -> str | None:
     """What is wrong with an episode's ``forces`` (:class:`~tolins.rollouts.forces.
     ForceScores` as JSON): its five scores, finite and ≥ 0, ``jams`` a count ≤ ``steps``."""
@@ -121,13 +125,24 @@ def _forces_problem(forces: Any, steps: Any) -> str | None:
 
 def _episode_problem(row: Any) -> str | None:
     fields = {"reward", "success", "steps", "collisions", "error"}
-    if not isinstance(row, dict) or set(row) - {"forces"} != fields:  # forces: tolins ≥ 0.4
+    optional = {"forces", "profile"}  # tolins ≥ 0.4
+    if not isinstance(row, dict) or set(row) - optional != fields:
         keys = sorted(row) if isinstance(row, dict) else type(row).__name__
-        return f"fields {keys}; allowed: {sorted(fields)} and forces"
+        return f"fields {keys}; allowed: {sorted(fields)}, forces and profile"
     if row.get("forces") is not None:
         problem = _forces_problem(row["forces"], row["steps"])
         if problem:
             return problem
+    profile = row.get("profile")
+    if profile is not None and not (
+        isinstance(profile, list)
+        and len(profile) <= HORIZON
+        and all(
+            isinstance(p, list) and len(p) == 2 and all(_finite_number(v) for v in p)
+            for p in profile
+        )
+    ):
+        return f"profile is not ≤ {HORIZON} [depth, force] pairs of finite numbers (one a step)"
     reward, steps, collisions = row["reward"], row["steps"], row["collisions"]
     low, high = REWARD_RANGE
     if not isinstance(reward, int | float) or isinstance(reward, bool):

@@ -61,3 +61,19 @@ def test_results_do_not_depend_on_the_worker_count(bench) -> None:
         with concurrent.futures.ThreadPoolExecutor(workers) as pool:
             outcomes.append([r[:2] for r in bench.run_physics(pool, sock, probes, 2.5, chunk=1)])
     assert outcomes[0] == outcomes[1]
+
+
+@pytest.mark.parametrize("grade", [100, 50, 20])
+def test_graded_sockets_agree_15_percent_of_the_clearance_from_the_boundary(bench, grade) -> None:
+    """``--grade``: the 2*2 socket and square peg at ``grade`` µm, probes ±15 % of the
+    clearance from the boundary along random directions (those beyond the 5 % band)."""
+    for sock in bench.graded_sockets(grade)[::2]:  # 2*2 and square
+        assert sock.spec.clearance == pytest.approx(grade * 1e-3)
+        offsets = np.tile([0.15 * grade, -0.15 * grade], 4)
+        probes = bench.make_probes(sock, 8, 11, grade, 16, offsets_um=offsets)
+        clear = [p for p in probes if abs(p.distance_um) > 0.05 * grade]
+        assert len(clear) >= 6 and {p.inside for p in clear} == {True, False}
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            results = bench.run_physics(pool, sock, clear, bench.FAST)
+        for probe, (outcome, z, _) in zip(clear, results, strict=True):
+            assert (outcome == "in") == probe.inside, (sock.name, probe, outcome, z)

@@ -493,7 +493,8 @@ def test_renderers_from_open_renderer_close_before_opengl_exits() -> None:
         renderer.update_scene(env.unwrapped.backend.data); renderer.render()
     """)
     _skip_without_egl(plain)
-    assert "EGLError" in plain.stderr  # what an unclosed renderer prints at exit
+    if "EGLError" not in plain.stderr:  # what an unclosed renderer prints at exit here
+        pytest.skip("an unclosed mujoco.Renderer exits cleanly with this OpenGL")
     result = _exit_without_close("""
         from tolins.envs.rendering import open_renderer
         env = gym.make("tolins/Circle2x2-v1"); env.reset(seed=0)

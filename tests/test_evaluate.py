@@ -200,7 +200,8 @@ def test_shipped_references_are_shown_by_default_and_named_with_reference(
     import tolins.bench.reference as reference
 
     (tmp_path / "quick").mkdir()
-    rows = {"C2.1": {**_bench_row("C2.1", 2), "reward_mean": 12.34}}
+    marked = {"reward_mean": 12.34, "reward_per_seed": [12.34], "reward_per_episode": [[12.34] * 2]}
+    rows = {"C2.1": {**_bench_row("C2.1", 2), **marked}}  # a consistent row (compare checks)
     document = {"schema": SCHEMA, "backend": "kinematic", "rows": rows}
     (tmp_path / "quick" / "results.json").write_text(json.dumps(document))
     monkeypatch.setattr(reference, "FOLDER", tmp_path)

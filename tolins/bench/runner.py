@@ -24,7 +24,7 @@ from tolins.bench.claims import check_claims
 from tolins.bench.config import EPISODES, RECORDING, BenchConfig, BenchRun
 from tolins.bench.evaluation import episodes_to_json, eval_seeds, evaluate_row
 from tolins.bench.executor import Job, make_executor
-from tolins.bench.integrity import checked_episodes, read_json
+from tolins.bench.integrity import StageFileError, checked_episodes, read_json
 from tolins.bench.lock import locked_folder
 from tolins.bench.profiles import PROFILES, Profile
 from tolins.bench.report import write_reports
@@ -104,6 +104,9 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
     run.claims = check_claims(run.results, budgets=budgets)
     if config.study:
         run.study = read_json(run.stage_folders["inference-study"] / STUDY)
+        if not isinstance(run.study, dict):
+            path = run.stage_folders["inference-study"] / STUDY
+            raise StageFileError(f"{path}: not an inference study; delete its folder to rerun")
     run.wall_s = time.perf_counter() - began
     write_reports(run, trainer, seeds)
     write_timeline(out, run)

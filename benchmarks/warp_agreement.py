@@ -207,6 +207,7 @@ def expert_episodes(seeds: list[int], device: str, env_id: str = "tolins/Circle2
         env = tolins.make_vec(env_id, len(seeds), backend=backend, **kwargs)
         experts = [EXPERTS["safe"]() for _ in seeds]
         obs, _ = env.reset(seed=list(seeds))
+        defective = [bool(socket.is_defective) for socket in env.unwrapped.sockets]
         done = np.zeros(len(seeds), dtype=bool)
         steps = np.zeros(len(seeds), dtype=int)
         success = np.zeros(len(seeds), dtype=bool)
@@ -222,6 +223,7 @@ def expert_episodes(seeds: list[int], device: str, env_id: str = "tolins/Circle2
         result[backend] = {
             "steps": steps.tolist(),
             "success": success.tolist(),
+            "defective": defective,
             "s": time.perf_counter() - start,
         }
     return result

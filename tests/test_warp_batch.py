@@ -172,6 +172,11 @@ def test_safe_expert_episodes_match_the_mujoco_backend(agreement) -> None:
     result = agreement.expert_episodes(seeds, "cpu")
     assert result["warp"]["success"] == result["mujoco"]["success"] == [True, True]
     assert result["warp"]["steps"] == result["mujoco"]["steps"]
+    # Bent pins drawn per env and episode: the per-world model rows.
+    result = agreement.expert_episodes([0, 1], "cpu", env_id="tolins/Circle2x1Defective-v1")
+    assert result["warp"]["defective"] == result["mujoco"]["defective"] == [True, True]
+    assert result["warp"]["success"] == result["mujoco"]["success"]
+    assert result["warp"]["steps"] == result["mujoco"]["steps"]
     env = gym.make_vec(
         "tolins/Circle2x2-v1",
         num_envs=1,

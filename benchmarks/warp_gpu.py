@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     import warp as wp
 
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_WARNING  # no banner, no per-module load lines
     wp.init()
     device = (
         wp.get_device(args.device) if args.device in {d.alias for d in wp.get_devices()} else None

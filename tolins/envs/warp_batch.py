@@ -61,10 +61,8 @@ ROWS_PER_CONTACT = 3
 def _import_warp() -> tuple[Any, Any]:
     """``(warp, mujoco_warp)``, or an ImportError that names the install line."""
     try:
-        import warp as wp
-
-        wp.config.quiet = True
         import mujoco_warp as mjw
+        import warp as wp
     except ImportError as error:
         raise ImportError(
             f"backend='warp' needs mujoco-warp and warp-lang ({error}); install them with "

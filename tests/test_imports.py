@@ -10,8 +10,10 @@ subpackage, then reports which ``tolins`` modules got loaded.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -138,3 +140,16 @@ def test_inference_imports_geometry_only(module: str) -> None:
     }
     assert not outside, f"{module} imports {sorted(outside)}"
     assert not {name for name in loaded if name.startswith("mujoco")}
+
+
+def test_only_the_warp_backend_imports_warp() -> None:
+    """``import tolins`` loads no Warp; only ``tolins.envs.warp_batch`` imports it (when a
+    ``backend="warp"`` batch is built), so tolins works without the ``warp`` extra."""
+    assert "mujoco_warp" not in _loaded("tolins", bare=False)
+    root = Path(__file__).resolve().parents[1] / "tolins"
+    importing = {
+        str(path.relative_to(root))
+        for path in root.rglob("*.py")
+        if re.search(r"^\s*(import|from)\s+(mujoco_)?warp\b", path.read_text(), re.MULTILINE)
+    }
+    assert importing == {"envs/warp_batch.py"}

@@ -36,9 +36,10 @@ _ACTIVATIONS = ("Tanh", "ReLU", "ELU", "LeakyReLU", "GELU", "SiLU", "Sigmoid", "
 _PLAIN = {
     "net_arch", "use_sde", "log_std_init", "full_std", "use_expln", "squash_output",
     "ortho_init", "share_features_extractor", "n_critics", "normalize_images", "clip_mean",
+    "features_extractor_kwargs",
 }  # fmt: skip
 #: Keyword arguments that do not change the deterministic action (dropped).
-_IGNORED = {"optimizer_class", "optimizer_kwargs", "features_extractor_kwargs"}
+_IGNORED = {"optimizer_class", "optimizer_kwargs"}
 _CLASS = re.compile(r"^<class '([\w.]+)'>$")
 
 

@@ -281,7 +281,19 @@ def check_resumable(out: str | Path, metadata: dict[str, Any]) -> None:
     with other ``metadata``: what a caller checks before it spends time on demonstrations."""
     path = Path(out) / CHECKPOINT
     if path.exists():
-        _check_metadata(path, load_payload(path, FORMAT), metadata)
+        _check_metadata(path, _payload(path), metadata)
+
+
+def _payload(path: Path) -> dict[str, Any]:
+    try:
+        return load_payload(path, FORMAT)
+    except ValueError as error:
+        if "'tolins.rs_gail_run/1'" not in str(error):
+            raise
+        raise ValueError(
+            f"{error} (tolins ≤ 0.3.0 pickled its CMA-ES state, and unpickling could run code "
+            f"from the file: not loaded); delete {path} to start the run afresh"
+        ) from None
 
 
 def _check_metadata(path: Path, payload: dict[str, Any], metadata: dict[str, Any]) -> None:
@@ -303,7 +315,7 @@ def _load(
     config: RSGailConfig,
     seed: int,
 ) -> dict[str, Any]:
-    payload = load_payload(path, FORMAT)
+    payload = _payload(path)
     _check_metadata(path, payload, metadata)
     try:
         iteration = int(payload["iteration"])

@@ -5,6 +5,7 @@ Usage::
     python benchmarks/env_throughput.py            # full run, about 90 s on 2 cores
     python benchmarks/env_throughput.py --quick    # a few seconds, a smoke test
     python benchmarks/env_throughput.py --steps 20 --min-time 2
+    python benchmarks/env_throughput.py --models-only   # part 2 alone (issue 19)
 
 What it measures, all in one run:
 
@@ -512,6 +513,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--envs", type=int, default=8, help="envs in the thread test")
     parser.add_argument("--threads", type=int, default=2, help="threads in the thread test")
     parser.add_argument("--quick", action="store_true", help="a few seconds: tiny runs")
+    parser.add_argument(
+        "--models-only", action="store_true", help="only part 2 (old vs new control step)"
+    )
     args = parser.parse_args(argv)
     if args.quick:
         args.steps, args.repeats, args.min_time, args.thread_steps = 4, 2, 0.02, 16
@@ -530,6 +534,13 @@ def main(argv: list[str] | None = None) -> int:
         f"and {args.min_time} s per variant, fastest block kept; resets excluded\n"
     )
 
+    if args.models_only:
+        print(f"Old vs new model: blocks of {args.steps} control steps, alternating")
+        problems = print_models(args.steps, args.repeats, args.min_time)
+        for p in problems:
+            print(f"WARNING: {p}")
+        print(f"total time {time.perf_counter() - start:.1f} s")
+        return 1 if problems else 0
     results = [measure_case(c, args.steps, args.repeats, args.min_time) for c in cases()]
     print_results(results)
     problems = check_regimes(results)

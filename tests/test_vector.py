@@ -214,3 +214,32 @@ def test_generic_id_takes_a_socket_and_refuses_unknown_ids() -> None:
         tolins.make_vec("CartPole-v1", 2)
     with pytest.raises(ValueError, match="backend"):
         tolins.make_vec("tolins/Circle2x2-v1", 2, backend="bullet")
+
+
+def test_batched_infos_are_gymnasiums_add_info_exactly() -> None:
+    from tolins.envs.vector import batch_infos
+
+    infos = [
+        {"a": 1, "b": np.array([1.0, 2.0]), "c": True, "d": {"e": 0.5}, "final_obs": np.ones(2)},
+        None,
+        {"a": 3, "b": np.array([3.0, 4.0]), "error": "boom", "d": {"e": 1.5, "f": "x"}},
+        {"a": 2.5, "c": np.bool_(False), "g": [1, 2], "h": np.float32(1.5)},
+    ]
+    vector = tolins.make_vec("tolins/Circle2x2-v1", 4, backend="kinematic").unwrapped
+    expected: dict = {}
+    for i, info in enumerate(infos):
+        if info is not None:
+            expected = vector._add_info(expected, info, i)
+
+    def same(a, b) -> None:
+        assert type(a) is type(b)
+        if isinstance(a, dict):
+            assert list(a) == list(b) or set(a) == set(b)
+            for key in a:
+                same(a[key], b[key])
+        else:
+            assert a.dtype == b.dtype and a.shape == b.shape
+            for x, y in zip(a, b, strict=True):
+                assert np.array_equal(np.asarray(x), np.asarray(y))
+
+    same(batch_infos(infos, 4), expected)

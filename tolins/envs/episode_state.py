@@ -159,13 +159,15 @@ class EpisodeState:
         self.state = state
         score = self.score.score(state, self.socket)
         self.observation = self._observe(state, rng)
-        info = self.info(score)
+        info = self.info(score, score.success)  # the score's success is the state's
         return self.observation.copy(), score.reward, score.success, score.truncated, info
 
-    def info(self, score: StepScore) -> dict[str, Any]:
-        """The ``info`` dict after a reset (``NO_SCORE``) or a step scored ``score``."""
+    def info(self, score: StepScore, success: bool | None = None) -> dict[str, Any]:
+        """The ``info`` dict after a reset (``NO_SCORE``) or a step scored ``score``
+        (``success``: the state's, when the caller knows it)."""
         state = self.state
-        success = self.settings.is_success(state, self.socket)
+        if success is None:
+            success = self.settings.is_success(state, self.socket)
         return {
             "success": success,
             "is_success": success,

@@ -79,7 +79,11 @@ class RewardTerms:
         )
 
     def to_info(self) -> dict[str, float]:
-        return {f"reward_{f.name}": float(getattr(self, f.name)) for f in fields(self)}
+        return {key: float(getattr(self, name)) for key, name in _INFO_KEYS}
+
+
+#: ``(info key, field)`` of every term, in field order.
+_INFO_KEYS = tuple((f"reward_{f.name}", f.name) for f in fields(RewardTerms))
 
 
 def check_reward_mode(mode: object) -> str:

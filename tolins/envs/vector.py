@@ -58,6 +58,43 @@ def make_batch_physics(
     return WarpBatch(socket, num_envs, control_dt, device=device or "cpu")
 
 
+def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
+    """gymnasium's batched info of the per-env ``infos`` (``None``: no info), as
+    ``VectorEnv._add_info`` builds it env by env (the same keys, arrays, dtypes and ``_key``
+    masks), one array per key."""
+    present = [i for i, info in enumerate(infos) if info is not None]
+    keys: dict[str, None] = {}
+    for i in present:
+        keys.update(dict.fromkeys(infos[i]))
+    out: dict[str, Any] = {}
+    for key in keys:
+        rows = [i for i in present if key in infos[i]]
+        values = [infos[i][key] for i in rows]
+        where: Any = slice(None) if len(rows) == n else rows
+        first = values[0]
+        if key != "final_obs" and isinstance(first, dict):
+            per_env: list[dict[str, Any] | None] = [None] * n
+            for i, value in zip(rows, values, strict=True):
+                per_env[i] = value
+            array: Any = batch_infos(per_env, n)
+        elif key != "final_obs" and (
+            type(first) in (int, float, bool) or isinstance(first, np.number)
+        ):
+            array = np.zeros(n, dtype=type(first))
+            array[where] = values
+        elif key != "final_obs" and isinstance(first, np.ndarray):
+            array = np.zeros((n, *first.shape), dtype=first.dtype)
+            array[where] = np.array(values)
+        else:
+            array = np.full(n, None, dtype=object)
+            for i, value in zip(rows, values, strict=True):
+                array[i] = value
+        mask = np.zeros(n, dtype=bool)
+        mask[where] = True
+        out[key], out[f"_{key}"] = array, mask
+    return out
+
+
 def _per_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
     """Gymnasium's rule: an int seeds env ``i`` with ``seed + i``; a list gives each its own."""
     if seed is None:
@@ -178,9 +215,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         observations, reset_infos = self._begin(ids, plans)
         if not mask.all():
             observations[~mask] = [self.episodes[i].observation for i in np.flatnonzero(~mask)]
-        infos: dict[str, Any] = {}
+        env_infos: list[dict[str, Any] | None] = [None] * self.num_envs
         for i, info in zip(ids.tolist(), reset_infos, strict=True):
-            infos = self._add_info(infos, info, i)
+            env_infos[i] = info
+        infos = batch_infos(env_infos, self.num_envs)
         self._autoreset[ids] = False
         return observations, infos
 
@@ -230,10 +268,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
                     info = {"final_obs": observations[i].copy(), "final_info": env_infos[i], **info}
                 env_infos[i] = info
             observations[ids] = reset_observations[ids]
-        infos: dict[str, Any] = {}
-        for i, info in enumerate(env_infos):
-            if info is not None:
-                infos = self._add_info(infos, info, i)
+        infos = batch_infos(env_infos, self.num_envs)
         self._autoreset = np.zeros(self.num_envs, bool) if same_step else ended
         return observations, rewards, terminations, truncations, infos
 

@@ -57,11 +57,12 @@ def in_holes(spec: SocketSpec, poses: object, depth: float) -> np.ndarray:
     blocked hole (``blocked_holes``).
     """
     poses = np.asarray(poses, dtype=float)
-    if getattr(spec, "blocked_holes", ()):
+    deep = poses[..., 3] <= -depth
+    if getattr(spec, "blocked_holes", ()) or not deep.any():  # most steps: above the depth
         return np.zeros(poses.shape[:-1], dtype=bool)
     offsets = pin_axes(spec, poses) - spec.hole_centers
     inside = np.sum(offsets * offsets, axis=-1) <= spec.hole_circumradius**2
-    return (poses[..., 3] <= -depth) & np.all(inside, axis=-1)
+    return deep & np.all(inside, axis=-1)
 
 
 def check_pose(spec: SocketSpec, pose: object, name: str = "pose") -> np.ndarray:

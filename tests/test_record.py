@@ -223,8 +223,8 @@ def test_replay_rejects_missing_and_corrupt_files(
     for path, what, status in (
         (tmp_path / "missing.rrd", "does not exist; allowed: an existing file", 2),
         (tmp_path, "is a folder", 2),
-        (junk, "not a readable .rrd", 1),
-        (truncated, ".rrd recording", 1),
+        (junk, "not a readable .rrd", 2),  # a file the user named: a user error
+        (truncated, ".rrd recording", 2),
     ):
         assert main(["replay", str(path)]) == status
         err = capsys.readouterr().err.strip()

@@ -23,7 +23,6 @@ from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
 from tolins import dmc
-from tolins.envs import insertion_env
 from tolins.envs.episode import MAX_NOISE_STD, TaskSettings
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.mujoco_backend import MujocoBackend
@@ -506,11 +505,6 @@ def test_renderers_from_open_renderer_close_before_opengl_exits() -> None:
     assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
-@pytest.mark.xfail(
-    not hasattr(insertion_env, "open_renderer"),
-    reason="InsertionEnv.render makes its renderer with mujoco.Renderer, not open_renderer",
-    strict=True,
-)
 def test_an_env_that_rendered_and_was_not_closed_exits_cleanly() -> None:
     result = _exit_without_close("""
         env = gym.make("tolins/Circle2x2-v1", render_mode="rgb_array"); env.reset(seed=0)

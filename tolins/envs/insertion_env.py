@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 
 from tolins.envs.backend import Backend
@@ -14,6 +13,7 @@ from tolins.envs.episode_state import EpisodeState
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.envs.rendering import open_renderer
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 
@@ -36,8 +36,9 @@ class InsertionEnv(gym.Env):
 
     **Action** ``[ux, uy, utheta, uz]``: velocities in mm/s and rad/s, a
     ``Box(-a_max, a_max)`` with the paper's ``a_max = [2.5, 2.5, 0.1, 2.5]``.
-    Larger values are clipped; NaN or inf raises ``ValueError`` and leaves the
-    state untouched. Each action is held for ``control_dt`` = 0.25 s.
+    Larger values are clipped; NaN, inf, bools, strings and complex numbers raise
+    ``ValueError`` and leave the state untouched. Each action is held for ``control_dt``
+    = 0.25 s.
 
     **Observation** (8 floats, float64):
 
@@ -68,13 +69,15 @@ class InsertionEnv(gym.Env):
     place a pin can reach within it, and the carrier plate above the pins stops on the
     board's top. ``reset`` raises ``ValueError`` for a pose outside this range or with a
     pin inside the board, and for a goal more than 2 mm / 0.15 rad from the nominal one.
-    ``control_dt`` must be a whole number of 1 ms physics steps in (0, 1] s.
+    ``control_dt`` must be a whole number of 1 ms physics steps in [2 ms, 1 s] (in one
+    physics step the re-anchored servos cannot move the workpiece).
 
     **Collision**: a control step with a collision is one in which the summed normal
     force of all contacts between the board and the pins exceeded ``collision_force``
-    (default 0.5 N) at any of the backend's checks during the step (five, evenly
-    spaced, on the MuJoCo backend). A sum of normal forces cannot cancel out, so a
-    pin wedged by a rotation (zero net force, non-zero torque) is a collision too.
+    (default 0.5 N) at any of the backend's checks during the step (on the MuJoCo
+    backend ``min(5, physics steps)`` reads, five 50 steps apart at the default 0.25 s).
+    A sum of normal forces cannot cancel out, so a pin wedged by a rotation (zero net
+    force, non-zero torque) is a collision too.
     The ``kinematic`` backend (the paper's simulator, docs/tolerance.md) reports a
     binary 1 N on a step that collides (the motion into the obstacle stops, the rest of
     the step slides along it).
@@ -137,9 +140,13 @@ class InsertionEnv(gym.Env):
       the carrier collides with the board's top; reset poses and goals are validated;
       stepping after the episode ended raises; ``reward_mode`` (the default,
       ``sparse``, is the paper's reward as before).
-    * v1, tolins 0.4.0 (outcomes unchanged): ``options={"goal": ...}`` applies to one
-      episode (it used to persist); a failed reset changes nothing and the next step
-      raises ``ResetNeeded``; ``tolins.make_vec`` / ``gym.make_vec`` give the batched
+    * v1, tolins 0.4.0 (default outcomes bit-identical to 0.3.0): ``options={"goal":
+      ...}`` applies to one episode (it used to persist; ``env.goal = ...`` still moves
+      the running episode's goal and the later ones'); a failed reset changes nothing and
+      the next step raises ``ResetNeeded``; every setting is validated (real numbers
+      only, ``success_depth < 4``, ``defect_sigma`` bounded with invalid bent-pin draws
+      re-drawn, ``control_dt ≥ 2 ms``); ``randomization``; ``info["workpiece"]`` at
+      reset; ``tolins.make_vec`` / ``gym.make_vec`` give the batched
       :class:`~tolins.envs.vector.InsertionVectorEnv`, bit-identical per env.
     * v0 (tolins 0.1.0): the first release.
     """
@@ -237,7 +244,7 @@ class InsertionEnv(gym.Env):
         if self.render_mode != "rgb_array":
             return None
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.backend.model, 480, 640)
+            self._renderer = open_renderer(self.backend.model, 480, 640)
         self._renderer.update_scene(self.backend.data, camera="overview")
         return self._renderer.render()
 

@@ -78,6 +78,10 @@ def _run(args: argparse.Namespace) -> int:
 
     prog = "tolins dataset"
     try:
+        import minari  # noqa: F401
+    except ImportError as error:
+        return cli_checks.fail(prog, f"needs Minari ({error}); allowed: pip install 'tolins[data]'")
+    try:
         entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
         name = args.name or default_name(args.env, _label(args))
         cli_checks.output_folder("--out", args.out)

@@ -87,6 +87,12 @@ SOCKETS = [
     pytest.param(CircularSocket(2, 2), id="2x2"),
     pytest.param(CircularSocket(2, 8), id="2x8"),
     pytest.param(sample_defects(CircularSocket(2, 4), 0.1, rng=2020), id="bent-2x4"),
+    pytest.param(
+        CircularSocket(
+            2, 4, pin_pitch_scale=(1.01, 1.0), pin_burrs=(0.05,) + (0.0,) * 7, blocked_holes=(5,)
+        ),
+        id="pitch-burr-plug-2x4",
+    ),
     pytest.param(PolygonSocket(4, 1.5, 1.65), id="square"),
     pytest.param(PolygonSocket(6, 1.2, 1.26), id="hexagon"),
     pytest.param(PolygonSocket(3, 1.5, 1.65), id="triangle"),
@@ -134,9 +140,10 @@ def test_a_large_socket_at_the_edge_of_the_servo_range_gives_the_same_trajectory
         CircularSocket(2, 20),
         CircularSocket(3, 5, row_pitch=2.0),
         sample_defects(CircularSocket(2, 8), 0.1, rng=3),
+        CircularSocket(2, 1, pin_pitch_scale=(1.0, 1.02), pin_burrs=(0.05, 0.0)),
         PolygonSocket(5, 1.5, 1.65),
     ],
-    ids=["2x20", "3x5", "bent-2x8", "pentagon"],
+    ids=["2x20", "3x5", "bent-2x8", "pitch-burr-2x1", "pentagon"],
 )
 def test_reach_boxes_hold_every_pin_over_the_servo_range(spec) -> None:
     rng = np.random.default_rng(0)
@@ -145,10 +152,10 @@ def test_reach_boxes_hold_every_pin_over_the_servo_range(spec) -> None:
         [corners.reshape(3, -1).T, rng.uniform(POSE_LOW[:3], POSE_HIGH[:3], (2000, 3))]
     )
     axes = pin_axes(spec, poses)  # (poses, pins, 2)
+    circle = isinstance(spec, CircularSocket)
+    radii = np.asarray(spec.pin_radii if circle else [spec.pin_reach])[:, None]
     boxes = pin_reach_boxes(spec)
-    assert np.all(axes - spec.pin_reach >= boxes[:, 0]) and np.all(
-        axes + spec.pin_reach <= boxes[:, 1]
-    )
+    assert np.all(axes - radii >= boxes[:, 0]) and np.all(axes + radii <= boxes[:, 1])
 
 
 def test_the_pairs_of_a_family_do_not_depend_on_bent_pins() -> None:

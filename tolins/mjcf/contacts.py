@@ -49,18 +49,29 @@ def _arc_range(a: float, b: float) -> tuple[float, float]:
     return min(values), max(values)
 
 
+def _swept(center: np.ndarray, grow: np.ndarray) -> np.ndarray:
+    """``[[x_lo, y_lo], [x_hi, y_hi]]`` of ``center`` turned over ``|theta| ≤ THETA_RANGE``,
+    grown by ``grow`` ``(2,)``."""
+    (x_lo, x_hi), (y_lo, y_hi) = _arc_range(center[0], -center[1]), _arc_range(*center[::-1])
+    return np.array([[x_lo - grow[0], y_lo - grow[1]], [x_hi + grow[0], y_hi + grow[1]]])
+
+
 def pin_reach_boxes(spec: SocketSpec) -> np.ndarray:
     """``(n_pins, 2, 2)``: per pin, ``[[x_lo, y_lo], [x_hi, y_hi]]`` (mm) of a box that holds
-    the pin's outline over the whole servo range and any bend of the spec's family."""
-    limit = spec.offset_limit if isinstance(spec, CircularSocket) else np.zeros(2)
+    the pin's outline over the whole servo range, for any bend of the spec's family (the
+    box of the nominal pin grown by ``offset_limit``) and for the spec's own pins (other
+    defects: pitch errors, burrs)."""
+    circle = isinstance(spec, CircularSocket)
+    limit = spec.offset_limit if circle else np.zeros(2)
+    radii = spec.pin_radii if circle else np.full(1, spec.pin_reach)
     sin = math.sin(THETA_RANGE)
     # |R(theta) d|_x ≤ |d_x| + |d_y| sin(theta) for |theta| ≤ THETA_RANGE, and alike in y.
     bend = limit + limit[::-1] * sin
     boxes = []
-    for cx, cy in spec.hole_centers:
-        (x_lo, x_hi), (y_lo, y_hi) = _arc_range(cx, -cy), _arc_range(cy, cx)
-        grow = XY_RANGE + spec.pin_reach + _SLACK + bend
-        boxes.append([[x_lo - grow[0], y_lo - grow[1]], [x_hi + grow[0], y_hi + grow[1]]])
+    for hole, pin, radius in zip(spec.hole_centers, spec.pin_centers, radii, strict=True):
+        grow = XY_RANGE + max(radius, spec.pin_reach) + _SLACK
+        nominal, own = _swept(hole, grow + bend), _swept(pin, np.full(2, grow))
+        boxes.append([np.minimum(nominal[0], own[0]), np.maximum(nominal[1], own[1])])
     return np.array(boxes)
 
 

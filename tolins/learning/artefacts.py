@@ -29,15 +29,18 @@ def load_payload(path: str | os.PathLike, fmt: str) -> dict[str, Any]:
     except FileNotFoundError:
         raise
     except pickle.UnpicklingError as error:
-        if "weights only" in str(error).lower():  # torch's advice, weights_only=False, would
-            raise ValueError(  # run code from the file
+        # torch's six lines advise weights_only=False, which would run code from the file
+        text = str(error)
+        if "Unsupported global" in text:
+            raise ValueError(
                 f"{path} holds objects other than tensors and plain values; not loaded (that "
                 f"would run code from the file); allowed: a file tolins wrote in format {fmt!r}"
             ) from None
+        detail = text.split("WeightsUnpickler error:", 1)[-1].strip().splitlines()
         raise ValueError(
-            f"{path} is not a readable torch checkpoint ({_first(error)}); allowed: a file "
-            f"tolins wrote in format {fmt!r}"
-        ) from error
+            f"{path} is not a readable torch checkpoint (UnpicklingError: "
+            f"{detail[0] if detail else ''}); allowed: a file tolins wrote in format {fmt!r}"
+        ) from None
     except Exception as error:
         detail = _first(error)
         raise ValueError(

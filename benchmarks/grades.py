@@ -60,7 +60,8 @@ def use_timestep(step_s: float | None) -> None:
     table = model_module.__dict__.setdefault(
         "_GRADE_TIMESTEPS_DEFAULT", model_module.GRADE_TIMESTEPS
     )
-    model_module.GRADE_TIMESTEPS = table if step_s is None else ((0.0, step_s),)
+    fixed = {family: ((0.0, step_s),) for family in table}
+    model_module.GRADE_TIMESTEPS = table if step_s is None else fixed
 
 
 def steps_per_second(spec, pose: list[float], steps: int = 4, rounds: int = 3) -> float:

@@ -53,7 +53,10 @@ def test_grade_presets_are_registered_with_their_step(task) -> None:
     env = gym.make(task.gym_id).unwrapped
     assert env.nominal_socket == task.socket
     model = mujoco.MjModel.from_xml_string(make_mjcf(task.socket))
-    expected = {100: 0.001, 50: 0.0005, 20: 0.00025}[um]
+    # Round pins keep 1 ms only at the paper's 200 µm (their rotation capture at 1 ms jumps
+    # with the clearance); polygon pegs down to 51 µm.
+    coarse = 0.001 if task.socket.family == "polygon" else 0.0005
+    expected = {100: coarse, 50: 0.0005, 20: 0.00025}[um]
     assert model.opt.timestep == expected
     assert model.geom_solref[0, 0] == pytest.approx(2 * expected)
 

@@ -5,7 +5,8 @@ trees, sensors computed in every physics step) is stepped side by side with toda
 (sensors only before each read, ``ServoStepper.lazy_sensors``) and with the opt-in
 ``make_mjcf(spec, contact_pairs=True)`` (explicit pin-piece ``<pair>``s) through the
 same episodes; after every control step their states, sensor readings and contacts
-must be equal exactly.
+must be equal exactly. The opt-in ``board_body=False`` (the board in the world body) is
+not bit-identical; its deviation is bounded here too.
 """
 
 from __future__ import annotations
@@ -25,8 +26,11 @@ SUBSTEPS = 250
 DOWN = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
 
 
-def _stepper(spec, contact_pairs: bool, lazy_sensors: bool) -> ServoStepper:
-    model = mujoco.MjModel.from_xml_string(make_mjcf(spec, contact_pairs=contact_pairs))
+def _stepper(
+    spec, contact_pairs: bool, lazy_sensors: bool, board_body: bool = True
+) -> ServoStepper:
+    xml = make_mjcf(spec, contact_pairs=contact_pairs, board_body=board_body)
+    model = mujoco.MjModel.from_xml_string(xml)
     stepper = ServoStepper(model, mujoco.MjData(model))
     stepper.lazy_sensors = lazy_sensors
     return stepper
@@ -173,8 +177,7 @@ def test_the_pairs_of_a_family_do_not_depend_on_bent_pins() -> None:
 
 def test_large_sockets_pair_each_pin_with_only_the_pieces_it_can_reach() -> None:
     model = mujoco.MjModel.from_xml_string(make_mjcf(CircularSocket(2, 20), contact_pairs=True))
-    board = model.body("board").id
-    pieces = int(np.sum(model.geom_bodyid == board))
+    pieces = int(np.sum(model.geom_bodyid == model.body("board").id))
     assert 0 < model.npair < 0.5 * pieces * 40
     # No pin collides automatically; the carrier still does.
     pins = [model.geom(f"pin{i}").id for i in range(40)]
@@ -192,7 +195,25 @@ def test_lazy_sensors_leave_the_model_flags_as_they_were() -> None:
 
 
 @pytest.mark.parametrize("spec", [CircularSocket(2, 4), PolygonSocket(6, 1.2, 1.26)])
-def test_contact_pairs_are_opt_in_and_deterministic(spec) -> None:
-    assert make_mjcf(spec) == make_mjcf(spec, contact_pairs=False)
-    assert "<pair " not in make_mjcf(spec)
-    assert make_mjcf(spec, contact_pairs=True) == make_mjcf(spec, contact_pairs=True)
+def test_contact_pairs_and_the_world_board_are_opt_in_and_deterministic(spec) -> None:
+    assert make_mjcf(spec) == make_mjcf(spec, contact_pairs=False, board_body=True)
+    assert "<pair " not in make_mjcf(spec) and '<body name="board">' in make_mjcf(spec)
+    for options in ({"contact_pairs": True}, {"board_body": False}):
+        assert make_mjcf(spec, **options) == make_mjcf(spec, **options)
+    assert '<body name="board">' not in make_mjcf(spec, board_body=False)
+
+
+@pytest.mark.parametrize("spec", [CircularSocket(2, 8), PolygonSocket(4, 1.5, 1.65)])
+def test_the_world_board_moves_expert_episodes_by_rounding_only(spec) -> None:
+    # Down to the servo's lower end, where the carrier rests on the board at zero distance.
+    old = _stepper(spec, contact_pairs=False, lazy_sensors=True)
+    new = _stepper(spec, contact_pairs=False, lazy_sensors=True, board_body=False)
+    pose = np.array([1.2, -0.9, 0.05, 2.0])
+    old.reset(pose), new.reset(pose)
+    expert = SafeExpert()
+    for _ in range(14):
+        action = expert(old.state(0.0).pose)
+        a, b = old.step(action, SUBSTEPS), new.step(action, SUBSTEPS)
+        np.testing.assert_allclose(b.pose, a.pose, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.wrench, a.wrench, rtol=0, atol=1e-9)
+    assert a.pose[3] == pytest.approx(-4.0, abs=0.01)

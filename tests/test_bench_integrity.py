@@ -198,6 +198,7 @@ def _row(document: dict) -> dict:
         (lambda d: _row(d).pop("reward_mean"), "row C2.1: no reward_mean"),
         (lambda d: _row(d).update(reward_mean=1e9), "reward_mean 1000000000.0 is not the mean"),
         (lambda d: _row(d).update(success_mean=float("nan")), "success_mean nan"),
+        (lambda d: _row(d).update(reward_per_seed=[1e9]), "are not the means of its"),
         (lambda d: d.pop("rows"), "no 'rows'; allowed: an object of row id"),
         (lambda d: d.update(rows=[1]), "list 'rows'"),
         (lambda d: d["rows"].update({"C2.1": "x"}), "row C2.1: a str"),

@@ -168,7 +168,18 @@ def entry_problem(entry: Any) -> str | None:
         and all(isinstance(seed, list) and all(_finite(r) for r in seed) for seed in episodes)
     ):
         return "reward_per_episode is not a list of lists of finite numbers (one per seed)"
-    flat = [r for seed in episodes or [] for r in seed] or entry.get("reward_per_seed") or []
+    per_seed = entry.get("reward_per_seed")
+    if episodes and per_seed is not None:
+        means = [float(np.mean(seed)) if seed else None for seed in episodes]
+        if len(means) != len(per_seed) or not all(
+            m is not None and np.isclose(m, v, rtol=1e-9, atol=1e-9)
+            for m, v in zip(means, per_seed, strict=False)
+        ):
+            return (
+                f"reward_per_seed {per_seed!r} are not the means of its reward_per_episode; "
+                "allowed: the file as tolins wrote it"
+            )
+    flat = [r for seed in episodes or [] for r in seed] or per_seed or []
     if flat and not np.isclose(float(np.mean(flat)), entry["reward_mean"], rtol=1e-9, atol=1e-9):
         source = "reward_per_episode" if episodes else "reward_per_seed"
         return (

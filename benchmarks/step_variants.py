@@ -10,6 +10,8 @@ Each variant edits today's model (``make_mjcf(socket)``, lazy sensors) or its st
 * ``island-off``: ``<flag island="disable"/>`` (one monolithic constraint solve);
 * ``midphase-off``: ``<flag midphase="disable"/>`` (all-to-all geom pairs, no BVH walk);
 * ``pairs``: ``make_mjcf(socket, contact_pairs=True)``;
+* ``world-board``: ``make_mjcf(socket, board_body=False)`` (the board's pieces in the
+  world body: no bounding box and covariance of them in the broadphase);
 * ``threadpool``: ``mujoco.mju_threadpool(data, 2)`` (narrowphase tasks on 2 threads);
 * ``libccd``: ``<flag nativeccd="disable"/>`` (libccd's GJK/EPA instead of MuJoCo's own);
 * ``dt2``, ``dt5``: timestep 2 or 5 ms (125 or 50 physics steps per control step; solref
@@ -55,6 +57,7 @@ VARIANTS: dict[str, tuple[Callable[[str], str] | None, int]] = {
     "island-off": (lambda x: _flag(x, 'island="disable"'), 0),
     "midphase-off": (lambda x: _flag(x, 'midphase="disable"'), 0),
     "pairs": (None, 0),
+    "world-board": (None, 0),
     "threadpool": (lambda x: x, 2),
     "libccd": (lambda x: _flag(x, 'nativeccd="disable"'), 0),
     "dt2": (lambda x: _timestep(x, 0.002), 0),
@@ -67,6 +70,8 @@ def build(socket, variant: str | None) -> tuple[ServoStepper, int]:
     """A stepper of today's model or of ``variant``, and its physics steps per control step."""
     if variant == "pairs":
         xml = make_mjcf(socket, contact_pairs=True)
+    elif variant == "world-board":
+        xml = make_mjcf(socket, board_body=False)
     else:
         xml = make_mjcf(socket)
         if variant is not None:

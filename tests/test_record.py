@@ -85,6 +85,9 @@ def test_rewards_collisions_success_and_events(recording: tuple) -> None:
         assert outcome["step"] == [i["step"] for _, i in later]
         expected = [[r, float(i["collision"]), float(i["success"])] for r, i in later]
         assert outcome["Scalars:scalars"] == expected
+        contact = tables[f"/contact/episode_{k:03d}#temporal"]
+        assert contact["step"] == [i["step"] for _, i in later]
+        assert contact["Scalars:scalars"] == [[i["peak_force"], 0.5] for _, i in later]
         events = tables[f"/events/episode_{k:03d}#temporal"]
         texts = [t[0] for t in events["TextLog:text"]]
         assert texts[0].startswith("start:") and f"seed {k}" in texts[0]

@@ -38,12 +38,15 @@ class EpisodeBuffer:
     index: int
     control_dt: float
     metadata: dict[str, Any]
+    #: The env's collision threshold (N), drawn beside the peak force.
+    collision_force: float = float("nan")
     steps: list[int] = field(default_factory=list)
     poses: list[np.ndarray] = field(default_factory=list)
     wrenches: list[np.ndarray] = field(default_factory=list)
     rewards: list[float] = field(default_factory=list)
     collisions: list[bool] = field(default_factory=list)
     successes: list[bool] = field(default_factory=list)
+    peak_forces: list[float] = field(default_factory=list)
     events: list[tuple[int, str, str]] = field(default_factory=list)
 
     def start(self, info: dict[str, Any]) -> None:
@@ -59,6 +62,7 @@ class EpisodeBuffer:
         self.rewards.append(float(reward))
         self.collisions.append(bool(info["collision"]))
         self.successes.append(bool(info["success"]))
+        self.peak_forces.append(float(info["peak_force"]))
         if info["collision"]:
             self.events.append((step, "WARN", f"collision: peak {info['peak_force']:.3g} N"))
         if "error" in info:
@@ -142,6 +146,13 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
             series_path("outcome", k),
             indexes=_indexes(steps[1:], episode.control_dt),
             columns=rr.Scalars.columns(scalars=outcome.ravel()).partition(np.full(n - 1, 3)),
+        )
+        threshold = np.full(n - 1, episode.collision_force)
+        contact = np.column_stack([episode.peak_forces, threshold])
+        stream.send_columns(
+            series_path("contact", k),
+            indexes=_indexes(steps[1:], episode.control_dt),
+            columns=rr.Scalars.columns(scalars=contact.ravel()).partition(np.full(n - 1, 2)),
         )
     ev_steps, levels, texts = zip(*episode.events, strict=True)
     stream.send_columns(

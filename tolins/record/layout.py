@@ -12,6 +12,9 @@ several episodes in one file stay separable:
 ``/wrench/{ep}``                   ``[Fx, Fy, q_theta, Fz]`` (N, N·mm)
 ``/outcome/{ep}``                  ``[reward, collision, success]`` per step
                                    (steps ≥ 1; collision and success 0 or 1)
+``/contact/{ep}``                  ``[peak force, collision force]`` per step
+                                   (N, steps ≥ 1: the force timeline against the
+                                   threshold of a collision)
 ``/events/{ep}``                   start, collision, success, end (text log)
 ``/metadata/{ep}``                 env id, spec, seed, policy (static)
 =================================  ==========================================
@@ -34,6 +37,7 @@ FORCE_COLOR = (220, 60, 50)
 POSE_NAMES = ["x (mm)", "y (mm)", "theta (rad)", "z (mm)"]
 WRENCH_NAMES = ["Fx (N)", "Fy (N)", "q_theta (N·mm)", "Fz (N)"]
 OUTCOME_NAMES = ["reward", "collision", "success"]
+CONTACT_NAMES = ["peak contact force (N)", "collision threshold (N)"]
 
 
 def episode_name(index: int) -> str:
@@ -73,6 +77,7 @@ def default_blueprint(extent: float | None = None, *, follow: bool = False) -> r
             for quantity, names in (
                 ("pose", POSE_NAMES),
                 ("wrench", WRENCH_NAMES),
+                ("contact", CONTACT_NAMES),
                 ("outcome", OUTCOME_NAMES),
             )
         ),

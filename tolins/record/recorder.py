@@ -130,7 +130,9 @@ class RerunRecorder(gym.Wrapper):
             "backend": base.backend_name,
             "spec": base.socket,
         }
-        self._episode = EpisodeBuffer(self.episodes_recorded, base.control_dt, metadata)
+        self._episode = EpisodeBuffer(
+            self.episodes_recorded, base.control_dt, metadata, base.collision_force
+        )
         self._episode.start(info)
         self.episodes_recorded += 1
         return observation, info

@@ -44,6 +44,7 @@ import physics_vs_geometry as pvg
 from tolins import CircularSocket, PolygonSocket
 from tolins.envs import InsertionEnv
 from tolins.geometry.specs import GRADES_UM, with_clearance
+from tolins.geometry.workspace import THETA_RANGE
 from tolins.mjcf import model as model_module
 
 SHAPES = {
@@ -83,7 +84,8 @@ def capture_um(spec, axis: int) -> float:
     """Largest inserting offset along ``axis`` (0: x, 2: theta) minus the limit, as the
     farthest pin point's displacement (µm)."""
     limit = spec.clearance if axis == 0 else pvg.extents(spec).theta[1]
-    case = capture.Case("", spec, axis, limit, 0.8 * limit, 1.5 * limit)
+    blocked = 1.5 * limit if axis == 0 else min(1.5 * limit, 0.99 * THETA_RANGE)
+    case = capture.Case("", spec, axis, limit, 0.8 * limit, blocked)
     resolution = 0.001 * spec.clearance * (1 if axis == 0 else 1 / 4.0)
     excess = capture.largest_inserting(case, capture.FAST, resolution) - limit
     arm = 1.0 if axis == 0 else float(np.max(np.linalg.norm(pvg.pin_points(spec), axis=1)))

@@ -243,3 +243,18 @@ def test_reset_info_carries_the_workpiece() -> None:
     _, _, _, _, step_info = env.step([0.0, 0.0, 0.0, 0.0])
     assert "workpiece" not in step_info
     assert workpiece_dict(SOCKET)["defective"] is False
+
+
+def test_the_inference_counts_pitch_error_burrs_and_blocked_holes() -> None:
+    from tolins.geometry.tolerance import pins_inside
+    from tolins.inference.goal import inside_matrix
+
+    spec = CircularSocket(2, 2, pin_pitch_scale=(1.03, 1.0), pin_burrs=(0.0, 0.06, 0.0, 0.0))
+    rng = np.random.default_rng(4)
+    offsets = rng.normal(0.0, 0.05, (300, 4, 2))
+    goals = np.column_stack([rng.uniform(-0.1, 0.1, (40, 2)), rng.uniform(-0.02, 0.02, 40)])
+    expected = pins_inside(spec, offsets[:, None], goals[None]).all(-1)
+    assert np.array_equal(inside_matrix(spec, offsets, goals), expected)
+    assert 0 < expected.mean() < 1
+    blocked = dataclasses.replace(spec, blocked_holes=(0,))
+    assert not inside_matrix(blocked, offsets, goals).any()

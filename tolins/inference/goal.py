@@ -60,15 +60,17 @@ def inside_matrix(spec: CircularSocket, offsets: np.ndarray, goals: np.ndarray) 
     Pin ``i``'s gap ``R(θ) p_i + (x, y) - h_i`` is ``[p_x, p_y, 1] @ [[cos, sin], [-sin, cos],
     [x - h_x, y - h_y]]`` per goal.
     """
-    holes = spec.hole_centers
+    holes, pins = spec.hole_centers, spec.nominal_pin_centers  # pitch error in the pins
     cos, sin = np.cos(goals[:, 2]), np.sin(goals[:, 2])
-    limit = spec.clearance * spec.clearance
+    # Each pin's own squared clearance (burrs); a blocked or too-large pin never fits.
+    clearances = spec.pin_clearances
+    limits = np.where(clearances >= 0, clearances * clearances, -1.0)
     inside = np.ones((len(offsets), len(goals)), dtype=bool)
     for i, (hx, hy) in enumerate(holes):
-        px, py = hx + offsets[:, i, 0:1], hy + offsets[:, i, 1:2]
+        px, py = pins[i, 0] + offsets[:, i, 0:1], pins[i, 1] + offsets[:, i, 1:2]
         dx = px * cos - py * sin + (goals[:, 0] - hx)
         dy = px * sin + py * cos + (goals[:, 1] - hy)
-        inside &= dx * dx + dy * dy <= limit
+        inside &= dx * dx + dy * dy <= limits[i]
     return inside
 
 

@@ -258,3 +258,18 @@ def test_the_inference_counts_pitch_error_burrs_and_blocked_holes() -> None:
     assert 0 < expected.mean() < 1
     blocked = dataclasses.replace(spec, blocked_holes=(0,))
     assert not inside_matrix(blocked, offsets, goals).any()
+
+
+def test_dataset_metadata_keeps_every_kind() -> None:
+    from tolins.datasets.envspec import decode, encode
+
+    spec = CircularSocket(
+        2,
+        2,
+        pin_offsets=((0.01, 0.0),) * 4,
+        pin_pitch_scale=(1.01, 1.0),
+        pin_burrs=(0.0, 0.1, 0.0, 0.0),
+        pin_shortenings=(0.0, 0.0, 0.3, 0.0),
+        blocked_holes=(1,),
+    )
+    assert decode(json.loads(json.dumps(encode(spec)))) == spec

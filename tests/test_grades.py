@@ -54,9 +54,10 @@ def test_grade_presets_are_registered_with_their_step(task) -> None:
     assert env.nominal_socket == task.socket
     model = mujoco.MjModel.from_xml_string(make_mjcf(task.socket))
     # Round pins keep 1 ms only at the paper's 200 µm (their rotation capture at 1 ms jumps
-    # with the clearance); polygon pegs down to 51 µm.
-    coarse = 0.001 if task.socket.family == "polygon" else 0.0005
-    expected = {100: coarse, 50: 0.0005, 20: 0.00025}[um]
+    # with the clearance); polygon pegs down to 51 µm, then 0.25 ms.
+    polygon = task.socket.family == "polygon"
+    expected = {100: 0.001 if polygon else 0.0005, 50: 0.00025 if polygon else 0.0005}
+    expected = expected.get(um, 0.00025)
     assert model.opt.timestep == expected
     assert model.geom_solref[0, 0] == pytest.approx(2 * expected)
 

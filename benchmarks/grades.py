@@ -98,7 +98,8 @@ def row(pool, name: str, grade: float, step_s: float | None, args) -> dict:
     c_um = spec.clearance * 1e3
     result = {"shape": name, "grade": grade, "step_ms": model_module.physics_timestep(spec) * 1e3}
     if args.probes and not args.cost_only:
-        sock = pvg.Socket(f"{name} fit{grade:g}", spec.family, spec)
+        # physics_vs_geometry caches an env per thread and socket name: one per step.
+        sock = pvg.Socket(f"{name} fit{grade:g} {result['step_ms']:g} ms", spec.family, spec)
         probes = pvg.make_probes(sock, args.probes, args.seed, OFFSETS * c_um, args.directions)
         outcomes = pvg.run_physics(pool, sock, probes, pvg.FAST)
         summary = pvg.summarise(probes, outcomes, BAND * c_um)

@@ -273,3 +273,53 @@ def test_dataset_metadata_keeps_every_kind() -> None:
         blocked_holes=(1,),
     )
     assert decode(json.loads(json.dumps(encode(spec)))) == spec
+
+
+@pytest.mark.parametrize(
+    ("defects", "field"),
+    [
+        (("pitch", 0.005), "pin_pitch_scale"),
+        (("burr", 0.05), "pin_burrs"),
+        (("short", 0.3), "pin_shortenings"),
+        (("blocked", None), "blocked_holes"),
+    ],
+)
+def test_the_env_draws_a_kind_per_reset(defects, field) -> None:
+    env = InsertionEnv(CircularSocket(2, 4), backend="kinematic", defects=defects)
+    drawn = [env.reset(seed=s)[1]["workpiece"][field] for s in (0, 1, 2, 0)]
+    assert all(drawn) and drawn[0] == drawn[3] and len({json.dumps(d) for d in drawn}) > 1
+    assert env.socket == CircularSocket(2, 4, **{field: tuple(drawn[3])})
+    # With defect_sigma the bend is drawn first, as without defects.
+    both = InsertionEnv(SOCKET, backend="kinematic", defect_sigma=0.05, defects=defects)
+    bent = InsertionEnv(SOCKET, backend="kinematic", defect_sigma=0.05)
+    assert (
+        both.reset(seed=3)[1]["workpiece"]["pin_offsets"]
+        == (bent.reset(seed=3)[1]["workpiece"]["pin_offsets"])
+    )
+
+
+@pytest.mark.parametrize(
+    ("defects", "match"),
+    [
+        (("cracked", 0.1), "unknown"),
+        (("blocked", 0.1), "None"),
+        (("burr", 0.9), "too large"),
+        ("burr", "allowed"),
+    ],
+)
+def test_the_env_refuses_bad_defects(defects, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        InsertionEnv(SOCKET, backend="kinematic", defects=defects)
+
+
+def test_the_vector_env_draws_kinds_as_the_single_env() -> None:
+    from tolins.envs.vector import InsertionVectorEnv
+
+    vector = InsertionVectorEnv(3, SOCKET, backend="kinematic", defects=("short", 0.4))
+    _, info = vector.reset(seed=7)
+    for i in range(3):
+        single = InsertionEnv(SOCKET, backend="kinematic", defects=("short", 0.4))
+        expected = single.reset(seed=7 + i)[1]["workpiece"]["pin_shortenings"]
+        assert list(info["workpiece"]["pin_shortenings"][i]) == expected
+    with pytest.raises(ValueError, match="not supported"):
+        InsertionVectorEnv(2, SOCKET, backend="mujoco", defects=("blocked", None))

@@ -16,7 +16,7 @@ from tolins.envs.backend import BackendState
 from tolins.envs.initial_pose import InitialPoseDistribution, spread_pose
 from tolins.envs.randomization import PhysicsDraw, PhysicsRandomization
 from tolins.envs.reward import RewardTerms, check_reward_mode, reward_terms
-from tolins.geometry.defects import check_defect_sigma, sample_defects
+from tolins.geometry.defects import check_defect_sigma, check_defects, sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 from tolins.geometry.validation import (
     check_int,
@@ -123,6 +123,10 @@ class TaskSettings:
             (:mod:`tolins.envs.reward`).
         randomization: Physics drawn per episode (:mod:`tolins.envs.randomization`), or
             ``None`` (the paper's fixed setting).
+        defects: Another kind of defect drawn every episode, ``(kind, sigma)`` as
+            :func:`~tolins.geometry.defects.sample_defects` takes them (e.g. ``("burr",
+            0.05)``, ``("blocked", None)``), after any bent pins of ``defect_sigma``; or
+            ``None``.
     """
 
     socket: SocketSpec
@@ -136,6 +140,7 @@ class TaskSettings:
     control_dt: float = CONTROL_DT
     reward_mode: str = "sparse"
     randomization: Any = None
+    defects: Any = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -146,6 +151,8 @@ class TaskSettings:
                 raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
             sigma = check_defect_sigma(self.socket, self.defect_sigma, "defect_sigma")
             set_(self, "defect_sigma", sigma)
+        if self.defects is not None:
+            set_(self, "defects", check_defects(self.socket, self.defects))
         for name, what in (
             ("measurement_noise", "[x, y, theta, z]"),
             ("force_noise", "[Fx, Fy, q_theta, Fz]"),
@@ -180,10 +187,14 @@ class TaskSettings:
         return None if self.randomization is None else self.randomization.sample(rng)
 
     def draw_socket(self, rng: np.random.Generator) -> SocketSpec:
-        """The episode's workpiece: a fresh bent-pin copy with ``defect_sigma``, else nominal."""
-        if self.defect_sigma is None:
-            return self.socket
-        return sample_defects(self.socket, self.defect_sigma, rng)
+        """The episode's workpiece: a fresh bent-pin copy with ``defect_sigma``, then a draw of
+        ``defects``' kind, else nominal."""
+        socket = self.socket
+        if self.defect_sigma is not None:
+            socket = sample_defects(socket, self.defect_sigma, rng)
+        if self.defects is not None:
+            socket = sample_defects(socket, self.defects[1], rng, kind=self.defects[0])
+        return socket
 
     def is_success(self, state: BackendState, socket: SocketSpec | None = None) -> bool:
         """Every pin of ``socket`` (the episode's workpiece, default the nominal one) inside

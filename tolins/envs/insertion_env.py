@@ -118,7 +118,10 @@ class InsertionEnv(gym.Env):
     the goal of that episode only (gymnasium's convention: options apply to one reset;
     ``env.goal = ...`` moves it for the running episode and the later ones). With
     ``defect_sigma``, every reset draws a new bent-pin workpiece (per-pin offsets ~ N(0,
-    sigma² I), mm) from the nominal circular ``socket``. ``randomization`` (``None`` by
+    sigma² I), mm) from the nominal circular ``socket``; ``defects=(kind, sigma)`` draws
+    another kind after it (``"pitch"``, ``"burr"``, ``"short"``, ``"blocked"``:
+    :func:`~tolins.geometry.defects.sample_defects`); the episode's workpiece is the
+    reset's ``info["workpiece"]``. ``randomization`` (``None`` by
     default: the paper's fixed physics; ``"default"``, a dict of ranges or a
     :class:`~tolins.envs.randomization.PhysicsRandomization`) draws friction, contact
     stiffness, servo gains and force limit, force-sensor bias and noise and the
@@ -170,6 +173,7 @@ class InsertionEnv(gym.Env):
         reward_mode: str = "sparse",
         randomization: Any = None,
         render_mode: str | None = None,
+        defects: Any = None,
     ) -> None:
         if backend not in BACKENDS:
             raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
@@ -187,6 +191,7 @@ class InsertionEnv(gym.Env):
             reward_mode=reward_mode,
             control_dt=control_dt,
             randomization=randomization,
+            defects=defects,
         )
         self.backend_name = backend
         self.control_dt = self.settings.control_dt
@@ -207,6 +212,7 @@ class InsertionEnv(gym.Env):
     initial_pose = _setting("initial_pose")
     reward_mode = _setting("reward_mode")
     randomization = _setting("randomization")
+    defects = _setting("defects")
 
     @property
     def goal(self) -> np.ndarray:

@@ -126,7 +126,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
             ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
             ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``,
-            ``randomization``).
+            ``randomization``, ``defects``).
 
     ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
     masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
@@ -171,6 +171,13 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         )
         if self.settings.randomization is not None and not hasattr(self.physics, "set_physics"):
             raise ValueError(f"randomization is not supported on backend={backend!r}")
+        kind = None if self.settings.defects is None else self.settings.defects[0]
+        # Warp's worlds carry only bent pins; a plug changes the MuJoCo batch's layout.
+        if (kind is not None and backend == "warp") or (kind == "blocked" and backend == "mujoco"):
+            raise ValueError(
+                f"defects={self.settings.defects!r} is not supported on backend={backend!r}; "
+                "allowed: the single env, or backend='kinematic' (and 'mujoco' but for blocked)"
+            )
         self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
         self.action_space = batch_space(self.single_action_space, self.num_envs)

@@ -107,6 +107,29 @@ def sample_defects(
     raise RuntimeError(f"{MAX_DRAWS} draws of sigma={sigma!r} all moved a pin out of its cell")
 
 
+def check_defects(
+    spec: object, defects: object, field: str = "defects"
+) -> tuple[str, float | None]:
+    """``defects`` as ``(kind, sigma)`` if :func:`sample_defects` can draw that kind at that
+    scale from ``spec``: a kind of :data:`DEFECT_KINDS` and its ``sigma`` (``None`` for
+    ``blocked``), checked by one trial draw."""
+    allowed = f"(kind, sigma) with kind one of {', '.join(DEFECT_KINDS)} (sigma None for blocked)"
+    if not isinstance(defects, (tuple, list)) or len(defects) != 2:
+        raise ValueError(f"{field}={defects!r}; allowed: {allowed}")
+    kind, sigma = defects
+    if kind not in DEFECT_KINDS:
+        raise ValueError(f"{field} kind={kind!r} is unknown; allowed: {allowed}")
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"{field} is set but only a CircularSocket has defects, not {spec!r}")
+    if kind == "bent":
+        return kind, check_defect_sigma(spec, sigma, field)
+    try:
+        sample_defects(spec, sigma, 0, kind=kind)
+    except RuntimeError as error:
+        raise ValueError(f"{field}={defects!r}: {error}") from None
+    return kind, None if sigma is None else float(sigma)
+
+
 #: Per kind: the spec field it sets and the largest ``sigma`` (its field's own bound).
 _KIND_LIMITS = {"pitch": MAX_PITCH_ERROR, "burr": MAX_BURR, "short": MAX_SHORTENING}
 

@@ -3,8 +3,8 @@ SB3 PPO wall time with 1 and 8 envs; the step cost of Meta-World's ``peg-insert-
 
 Usage::
 
-    python benchmarks/vector_scaling.py                    # full run, ~20 min on 2 shared cores
-    python benchmarks/vector_scaling.py --quick            # a few seconds, a smoke test
+    python benchmarks/vector_scaling.py                    # full run, ~26 min on 2 cores
+    python benchmarks/vector_scaling.py --quick            # ~11 s of CPU, a smoke test
     python benchmarks/vector_scaling.py --ppo-steps 51200 --no-metaworld
 
 What it measures, all in one run. Every figure is timed by blocks: a block resets (untimed)
@@ -490,7 +490,7 @@ def machine() -> str:
 
 def parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a smoke test of a few seconds")
+    parser.add_argument("--quick", action="store_true", help="a smoke test (~11 s of CPU)")
     parser.add_argument("--envs", default="1,2,4,8,16,64", help="the Ns of the 2*2 socket")
     parser.add_argument("--envs-2x8", default="1,16", help="the Ns of the 2*8 socket")
     parser.add_argument("--backends", default="mujoco,kinematic", help="backends of part 1")

@@ -1,4 +1,5 @@
-"""Episodes the tests run again and again (shared by several test modules)."""
+"""Episodes (and tiny trainings) the tests run again and again, shared by several test
+modules."""
 
 from __future__ import annotations
 
@@ -42,3 +43,22 @@ def random_rollout(
         if terminated or truncated:
             break
     return observations
+
+
+def train_rs_gail_on_kinematic(policy, demos, out, config, env_id: str, **kwargs):
+    """RS-GAIL from ``policy`` on ``env_id``'s kinematic backend, seed 0, no progress bar
+    (``kwargs``: more keywords of ``train_rs_gail``)."""
+    from tolins.learning.rs_gail import Workpiece, train_rs_gail
+
+    return train_rs_gail(
+        policy,
+        [Workpiece(env_id)],
+        demos,
+        config,
+        seed=0,
+        backend="kinematic",
+        out=out,
+        metadata={"test": 1},
+        progress=False,
+        **kwargs,
+    )

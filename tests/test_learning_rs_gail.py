@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 import torch
+from rollouts import train_rs_gail_on_kinematic
 
 from tolins import __version__
 from tolins.cli import main
@@ -16,7 +17,7 @@ from tolins.learning.bc import behaviour_clone
 from tolins.learning.demonstrations import collect
 from tolins.learning.policy import load_policy
 from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig
-from tolins.learning.rs_gail import Workpiece, train_rs_gail
+from tolins.learning.rs_gail import Workpiece
 from tolins.learning.tolerance_guided import train_tolerance_guided
 
 ENV = "tolins/Circle2x2-v1"
@@ -34,18 +35,7 @@ def bc_policy(demos):
 
 
 def _train(policy, demos, out, config, **kwargs):
-    return train_rs_gail(
-        policy,
-        [Workpiece(ENV)],
-        demos,
-        config,
-        seed=0,
-        backend="kinematic",
-        out=out,
-        metadata={"test": 1},
-        progress=False,
-        **kwargs,
-    )
+    return train_rs_gail_on_kinematic(policy, demos, out, config, ENV, **kwargs)
 
 
 def _figures(history):

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from rollouts import train_rs_gail_on_kinematic
 
 import tolins
 from tolins.cli import main
@@ -45,7 +46,6 @@ def interrupted(tmp_path_factory):
     """An RS-GAIL run interrupted after 2 of 4 iterations, and the same run uninterrupted."""
     from tolins.learning.bc import behaviour_clone
     from tolins.learning.demonstrations import collect
-    from tolins.learning.rs_gail import Workpiece, train_rs_gail
 
     demos = collect(ENV, "safe", 8, seed=0, backend="kinematic")
     start = behaviour_clone(demos, BCConfig(epochs=5, batch_size=64), seed=0).policy
@@ -53,18 +53,8 @@ def interrupted(tmp_path_factory):
     root = tmp_path_factory.mktemp("rs")
 
     def train(out, **kwargs):
-        return train_rs_gail(
-            start.with_flat(start.get_flat()),
-            [Workpiece(ENV)],
-            demos,
-            config,
-            seed=0,
-            backend="kinematic",
-            out=out,
-            metadata={"test": 1},
-            progress=False,
-            **kwargs,
-        )
+        policy = start.with_flat(start.get_flat())
+        return train_rs_gail_on_kinematic(policy, demos, out, config, ENV, **kwargs)
 
     def stop(iteration, _row):
         if iteration == 1:

@@ -58,6 +58,18 @@ def default_contact_checks(substeps: int) -> int:
     return min(CONTACT_CHECKS, substeps)
 
 
+def control_plan(
+    model: mujoco.MjModel, control_dt: float, contact_checks: int | None = None
+) -> tuple[int, int]:
+    """``(physics steps, contact reads)`` of one control step of ``model``: the steps of
+    ``control_dt`` (:func:`physics_steps`) and ``contact_checks`` reads, default
+    :func:`default_contact_checks`, checked to lie in 1 … the steps."""
+    substeps = physics_steps(model, control_dt)
+    if contact_checks is None:
+        contact_checks = default_contact_checks(substeps)
+    return substeps, check_int("contact_checks", contact_checks, minimum=1, maximum=substeps)
+
+
 def board_wrench(theta: float, force: list[float], torque_z: float) -> np.ndarray:
     """``[Fx, Fy, q_theta, Fz]`` (N, N·mm, world axes) the board exerts on the workpiece,
     from the force sensor's ``force`` (workpiece axes, rotated by ``theta``) and the z
@@ -256,11 +268,7 @@ class MujocoBackend:
         self.spec = spec
         self.model = mujoco.MjModel.from_xml_string(make_mjcf(spec))
         self.data = mujoco.MjData(self.model)
-        substeps = physics_steps(self.model, control_dt)
-        if contact_checks is None:
-            contact_checks = default_contact_checks(substeps)
-        check_int("contact_checks", contact_checks, minimum=1, maximum=substeps)
-        self.substeps = substeps
+        self.substeps, contact_checks = control_plan(self.model, control_dt, contact_checks)
         self.stepper = ServoStepper(self.model, self.data, contact_checks)
         self._nominal: dict[str, np.ndarray] | None = None
 

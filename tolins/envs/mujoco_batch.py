@@ -30,8 +30,7 @@ from tolins.envs.mujoco_backend import (
     ServoStepper,
     _touch_sensors,
     board_wrench,
-    default_contact_checks,
-    physics_steps,
+    control_plan,
     pin_geom_ids,
     pin_touch_points,
     simulation_fault,
@@ -86,10 +85,7 @@ class MujocoBatch:
         self.num_threads = check_int("num_threads", threads, minimum=1)
         self.socket = socket
         self.model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
-        self.substeps = physics_steps(self.model, control_dt)
-        if contact_checks is None:
-            contact_checks = default_contact_checks(self.substeps)
-        self.checks = check_int("contact_checks", contact_checks, minimum=1, maximum=self.substeps)
+        self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         self.batch = mujoco.batch.Batch(
             self.model, self.num_envs, nthread=self.num_threads, persistent=persistent
         )

@@ -40,8 +40,7 @@ from tolins.envs.mujoco_backend import (
     _FORCE_SCALE,
     _SWAP_Z_THETA,
     _touch_sensors,
-    default_contact_checks,
-    physics_steps,
+    control_plan,
 )
 from tolins.geometry.specs import CircularSocket, SocketSpec
 from tolins.geometry.validation import check_int
@@ -154,10 +153,7 @@ class WarpBatch:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         self.socket = socket
         self.model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
-        self.substeps = physics_steps(self.model, control_dt)
-        if contact_checks is None:
-            contact_checks = default_contact_checks(self.substeps)
-        self.checks = check_int("contact_checks", contact_checks, minimum=1, maximum=self.substeps)
+        self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         touch, self.n_pins = _touch_sensors(self.model)
         self._touch = slice(touch, touch + self.n_pins)
         force = self.model.sensor("force").adr[0]

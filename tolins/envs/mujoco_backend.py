@@ -7,7 +7,9 @@ the dm_control physics (:class:`tolins.dmc.InsertionPhysics`) both step through 
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterable, Iterator
 
 import mujoco
 import numpy as np
@@ -68,6 +70,28 @@ def control_plan(
     if contact_checks is None:
         contact_checks = default_contact_checks(substeps)
     return substeps, check_int("contact_checks", contact_checks, minimum=1, maximum=substeps)
+
+
+def contact_chunks(nstep: int, checks: int) -> list[int]:
+    """The physics steps between the contact reads of one control step: ``checks`` chunks
+    of ``nstep // checks`` steps, the first ``nstep % checks`` one step longer, empty ones
+    dropped (every MuJoCo stepper's schedule)."""
+    chunk, extra = divmod(nstep, checks)
+    return [n for n in (chunk + (i < extra) for i in range(checks)) if n]
+
+
+@contextlib.contextmanager
+def sensors_off(models: Iterable[mujoco.MjModel]) -> Iterator[None]:
+    """The models' sensors switched off inside the block (lazy sensors: the state and every
+    value read later are the same bit for bit), their flags restored after it."""
+    flags = [(model, model.opt.disableflags) for model in models]
+    for model, value in flags:
+        model.opt.disableflags = value | _SENSORS_OFF
+    try:
+        yield
+    finally:
+        for model, value in flags:
+            model.opt.disableflags = value
 
 
 def board_wrench(theta: float, force: list[float], torque_z: float) -> np.ndarray:
@@ -212,12 +236,9 @@ class ServoStepper:
         warnings_before = sum(self._warnings.tolist())
         d.act[:] = d.qpos
         touch, peak = self._touch, 0.0
-        chunk, extra = divmod(nstep, self.checks)
-        for i in range(self.checks):
-            n = chunk + (i < extra)
-            if n:
-                self._physics_steps(n)
-                peak = max(peak, sum(touch.tolist()))
+        for n in contact_chunks(nstep, self.checks):
+            self._physics_steps(n)
+            peak = max(peak, sum(touch.tolist()))
         return self.state(peak * _FORCE_SCALE, self._fault(warnings_before))
 
     #: Compute the sensors only in the last physics step before each read of them: the
@@ -231,12 +252,8 @@ class ServoStepper:
         off for all but the last, so the model must not be stepped elsewhere meanwhile."""
         m, d = self.model, self.data
         if self.lazy_sensors and n > 1:
-            flags = m.opt.disableflags
-            m.opt.disableflags = flags | _SENSORS_OFF
-            try:
+            with sensors_off([m]):
                 mujoco.mj_step(m, d, nstep=n - 1)
-            finally:
-                m.opt.disableflags = flags
             n = 1
         mujoco.mj_step(m, d, nstep=n)
 

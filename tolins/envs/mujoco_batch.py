@@ -25,14 +25,15 @@ import numpy as np
 from tolins.envs.batch import BatchState
 from tolins.envs.mujoco_backend import (
     _FORCE_SCALE,
-    _SENSORS_OFF,
     _SWAP_Z_THETA,
     ServoStepper,
     _touch_sensors,
     board_wrench,
+    contact_chunks,
     control_plan,
     pin_geom_ids,
     pin_touch_points,
+    sensors_off,
     simulation_fault,
 )
 from tolins.envs.randomization import PhysicsDraw, apply_draw, nominal_fields
@@ -163,13 +164,10 @@ class MujocoBatch:
         self._ctrl[ids] = np.asarray(velocities, dtype=float)[:, _SWAP_Z_THETA]
         self._act[ids] = self._qpos[ids]
         peak = np.zeros(len(ids))
-        chunk, extra = divmod(self.substeps, self.checks)
-        for i in range(self.checks):
-            n = chunk + (i < extra)
-            if n:
-                self._physics_steps(ids, n)
-                touch = _sequential_sum(self._sensordata[ids, self._touch])
-                peak = np.where(touch > peak, touch, peak)  # max(peak, touch), as Python's
+        for n in contact_chunks(self.substeps, self.checks):
+            self._physics_steps(ids, n)
+            touch = _sequential_sum(self._sensordata[ids, self._touch])
+            peak = np.where(touch > peak, touch, peak)  # max(peak, touch), as Python's
         errors = tuple(
             simulation_fault(b, warning[i, :, 1].tolist(), self._qpos[i], self._qvel[i])
             for b, i in zip(before, ids.tolist(), strict=True)
@@ -182,14 +180,8 @@ class MujocoBatch:
         sensor data read after it are the same bit for bit)."""
         if ServoStepper.lazy_sensors and n > 1:
             models = {id(self._models[i]): self._models[i] for i in ids.tolist()}.values()
-            flags = [(model, model.opt.disableflags) for model in models]
-            for model, value in flags:
-                model.opt.disableflags = value | _SENSORS_OFF
-            try:
+            with sensors_off(models):
                 self.batch.step(ids, nstep=n - 1)
-            finally:
-                for model, value in flags:
-                    model.opt.disableflags = value
             n = 1
         self.batch.step(ids, nstep=n)
 

@@ -40,6 +40,7 @@ from tolins.envs.mujoco_backend import (
     _FORCE_SCALE,
     _SWAP_Z_THETA,
     _touch_sensors,
+    contact_chunks,
     control_plan,
 )
 from tolins.geometry.specs import CircularSocket, SocketSpec
@@ -241,13 +242,10 @@ class WarpBatch:
         self.d.ctrl.assign(ctrl)
         self.d.act.assign(self.d.qpos.numpy())  # the servos re-anchored, as ServoStepper
         peak = np.zeros(len(ids))
-        chunk, extra = divmod(self.substeps, self.checks)
-        for i in range(self.checks):
-            n = chunk + (i < extra)
-            if n:
-                self._advance(n)
-                touch = self.d.sensordata.numpy()[ids][:, self._touch].astype(float).sum(axis=1)
-                peak = np.maximum(peak, touch)
+        for n in contact_chunks(self.substeps, self.checks):
+            self._advance(n)
+            touch = self.d.sensordata.numpy()[ids][:, self._touch].astype(float).sum(axis=1)
+            peak = np.maximum(peak, touch)
         if saved is not None:
             self._restore(saved, ~mask)
         return self._state(ids, peak * _FORCE_SCALE, self._faults(ids))

@@ -143,11 +143,6 @@ class EpisodeState:
         """Whether an episode has been started and has not ended (a broken one counts)."""
         return self.state is not None and not self.score.over
 
-    @property
-    def over(self) -> bool:
-        """Whether the episode has ended (success, horizon or fault)."""
-        return self.score.over
-
     def advance(
         self, state: BackendState, rng: np.random.Generator
     ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

@@ -72,23 +72,24 @@ def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
         values = [infos[i][key] for i in rows]
         where: Any = slice(None) if len(rows) == n else rows
         first = values[0]
-        if key != "final_obs" and isinstance(first, dict):
-            per_env: list[dict[str, Any] | None] = [None] * n
-            for i, value in zip(rows, values, strict=True):
-                per_env[i] = value
-            array: Any = batch_infos(per_env, n)
-        elif key != "final_obs" and (
-            type(first) in (int, float, bool) or isinstance(first, np.number)
-        ):
-            array = np.zeros(n, dtype=type(first))
-            array[where] = values
-        elif key != "final_obs" and isinstance(first, np.ndarray):
-            array = np.zeros((n, *first.shape), dtype=first.dtype)
-            array[where] = np.array(values)
-        else:
+        array: Any
+        if key == "final_obs" or not (
+            isinstance(first, (dict, np.ndarray, np.number)) or type(first) in (int, float, bool)
+        ):  # gymnasium keeps these (and every final_obs) as objects
             array = np.full(n, None, dtype=object)
             for i, value in zip(rows, values, strict=True):
                 array[i] = value
+        elif isinstance(first, dict):
+            per_env: list[dict[str, Any] | None] = [None] * n
+            for i, value in zip(rows, values, strict=True):
+                per_env[i] = value
+            array = batch_infos(per_env, n)
+        elif isinstance(first, np.ndarray):
+            array = np.zeros((n, *first.shape), dtype=first.dtype)
+            array[where] = np.array(values)
+        else:
+            array = np.zeros(n, dtype=type(first))
+            array[where] = values
         mask = np.zeros(n, dtype=bool)
         mask[where] = True
         out[key], out[f"_{key}"] = array, mask

@@ -111,11 +111,12 @@ def _run_in(env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]):
                 yield slot.job, _finish(slot, infos, i)
                 slots[i], ended = None, True
         if ended and queue:
-            observations = _start(env, jobs, queue, slots, observations)
+            observations = _start(env, jobs, queue, slots)
 
 
-def _start(env, jobs, queue, slots, observations=None) -> np.ndarray:
-    """Put the next queued jobs into the free slots and reset those slots with their seeds."""
+def _start(env, jobs, queue, slots) -> np.ndarray:
+    """Put the next queued jobs into the free slots and reset those slots with their seeds;
+    every env's observation (a masked reset keeps the others' last ones)."""
     mask = np.zeros(env.num_envs, dtype=bool)
     seeds: list[int | None] = [None] * env.num_envs
     starting: dict[int, int] = {}
@@ -123,20 +124,9 @@ def _start(env, jobs, queue, slots, observations=None) -> np.ndarray:
         if slots[i] is None and queue:
             starting[i] = queue.popleft()
             mask[i], seeds[i] = True, int(jobs[starting[i]].seed)
-    if not mask.any():
-        return observations
-    fresh, infos = env.reset(seed=seeds, options={"reset_mask": mask})
+    observations, infos = env.reset(seed=seeds, options={"reset_mask": mask})
     for i, job in starting.items():
-        z = float(infos["pose"][i][3])
-        settings = env.settings
-        tracker = ForceTracker(
-            z, control_dt=settings.control_dt, collision_force=settings.collision_force
-        )
-        slots[i] = _Slot(job, tracker)
-    if observations is None:
-        return fresh
-    observations = observations.copy()
-    observations[mask] = fresh[mask]
+        slots[i] = _Slot(job, ForceTracker.of(env.settings, {"pose": infos["pose"][i]}))
     return observations
 
 

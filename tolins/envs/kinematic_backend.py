@@ -43,12 +43,11 @@ sliver of wall; none at these clearances and speeds).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
 from tolins.envs.backend import BackendState
+from tolins.envs.batch import BatchState
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import contains, pin_levels, pins_inside_pose
 from tolins.geometry.validation import check_int, checked_array
@@ -61,16 +60,6 @@ CONTACT_TORQUE = 1.0
 _SAMPLES = 16
 _BISECTIONS = 28
 _FRACTIONS = np.arange(1, _SAMPLES + 1) / _SAMPLES
-
-
-@dataclass(frozen=True)
-class BatchState:
-    """Workpieces of a :class:`KinematicBatch`: ``pose`` and ``wrench`` ``(n, 4)`` as in
-    :class:`~tolins.envs.backend.BackendState`, ``peak_force`` ``(n,)`` (N)."""
-
-    pose: np.ndarray
-    wrench: np.ndarray
-    peak_force: np.ndarray
 
 
 def colliding(spec: SocketSpec, poses: np.ndarray) -> np.ndarray:
@@ -247,14 +236,10 @@ class KinematicBackend:
         self._data: mujoco.MjData | None = None
 
     def reset(self, pose: np.ndarray) -> BackendState:
-        return self._single(self._batch.reset(np.reshape(pose, (1, 4))))
+        return self._batch.reset(np.reshape(pose, (1, 4))).row(0)
 
     def step(self, velocity: np.ndarray) -> BackendState:
-        return self._single(self._batch.step(np.reshape(velocity, (1, 4))))
-
-    @staticmethod
-    def _single(state: BatchState) -> BackendState:
-        return BackendState(state.pose[0], state.wrench[0], float(state.peak_force[0]))
+        return self._batch.step(np.reshape(velocity, (1, 4))).row(0)
 
     @property
     def model(self) -> mujoco.MjModel:

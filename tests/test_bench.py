@@ -173,8 +173,9 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
-    # 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study: none ran again
-    assert len(again.cached) == 32
+    # 5 demonstration datasets, 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study:
+    # none ran again
+    assert len(again.cached) == 37
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
@@ -233,13 +234,14 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
 
     (tmp_path / "a").rename(tmp_path / "b")
     resumed = quiet(config("b"))
-    assert resumed.cached == ["bc_safe-seed0"]  # π_n resumed from its checkpoint
+    # π_n resumed from its checkpoint
+    assert resumed.cached == ["demos-Circle2x2-safe-seed0-0", "bc_safe-seed0"]
     assert resumed.results == whole.results
 
     (tmp_path / "b").rename(tmp_path / "c")
     again = quiet(config("c"))
     assert sorted(again.cached) == sorted(again.stage_wall_s)  # every stage, none re-run
-    assert len(again.cached) == 5  # bc, π_n, two evaluations, the study
+    assert len(again.cached) == 6  # the demonstrations, bc, π_n, two evaluations, the study
     assert again.results == whole.results
     assert again.study == whole.study
     for name in ("results.json", "inference.json"):

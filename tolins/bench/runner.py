@@ -22,6 +22,7 @@ from tqdm import tqdm
 from tolins.atomic import atomic_json
 from tolins.bench.claims import check_claims
 from tolins.bench.config import EPISODES, RECORDING, BenchConfig, BenchRun
+from tolins.bench.demonstrations import check_minari, demos_stage
 from tolins.bench.evaluation import episodes_to_json, eval_seeds, evaluate_row
 from tolins.bench.executor import Job, make_executor
 from tolins.bench.integrity import StageFileError, checked_episodes, read_json
@@ -63,6 +64,8 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
     try:
         local = executor.name == "local"
         plan = _Plan(cache, log)
+        if any(trainer.demo_stages(t.name, 0) for row in rows for t in row.trainings):
+            check_minari()
         pool = executor.candidate_pool()
         _plan_trainings(plan, trainer, rows, seeds, pool, progress and local, log)
         _plan_evaluations(plan, trainer, rows, seeds)
@@ -138,10 +141,12 @@ class _Plan:
         side_by_side: bool = False,
         result: str | None = None,
         takes_upstream: bool = True,
+        needs: tuple[str, ...] = (),
     ) -> None:
         """Stage ``name``: finished (its ``result`` file, or folder) or a job of ``fn(*args,
         upstream's result)`` (``upstream``: an earlier stage name, or ``None`` passed as
-        such; nothing with ``takes_upstream=False``)."""
+        such; nothing with ``takes_upstream=False``) that runs after the earlier stages
+        ``needs`` (the results of those that run as jobs come last)."""
         self._names.add(name)
         bad = self.cache.discard_bad(name, config)
         if bad is not None:
@@ -158,6 +163,7 @@ class _Plan:
             args = (*args, None if upstream is None else self.done[upstream])
         else:
             deps = (upstream,)
+        deps += tuple(need for need in needs if need not in self.done)
         self.jobs.append(Job(name, fn, args, deps, side_by_side))
 
 
@@ -178,6 +184,16 @@ def _plan_trainings(
                 if stage in plan:
                     continue
                 up = training.upstream
+                demos = trainer.demo_stages(training.name, seed)
+                for demo in demos:
+                    if demo.name not in plan:
+                        plan.add(
+                            demo.name,
+                            demo.config(),
+                            demos_stage,
+                            (cache.root.parent, demo),
+                            takes_upstream=False,
+                        )
                 plan.trainings[stage] = f"{training.method} on {', '.join(training.env_ids)}"
                 plan.add(
                     stage,
@@ -186,6 +202,7 @@ def _plan_trainings(
                     (cache.root.parent, profile, backend, training.name, seed, pool, progress),
                     None if up is None else trainer.stage_name(up, seed),
                     result=trainer.policy_file(training.name),
+                    needs=tuple(demo.name for demo in demos),
                 )
                 if stage in plan.cached:
                     log(f"{stage}: cached ({trainer.cache.wall_s(plan.done[stage].parent):.0f} s)")
@@ -224,6 +241,8 @@ def _log_done(
 ) -> None:
     if job.name.startswith("eval-"):
         bar.update()
+    elif job.name.startswith("demos-"):
+        log(f"{job.name}: {job.args[1].episodes} episodes written ({cache.wall_s(result):.0f} s)")
     elif job.name != "inference-study":
         log(f"{job.name}: trained ({cache.wall_s(result.parent):.0f} s)")
 

@@ -12,13 +12,20 @@ from tolins.atomic import atomic_json
 from tolins.bench.config import BenchRun
 from tolins.bench.plots import _pyplot, _save
 
-KINDS = {"training": "tab:blue", "evaluation": "tab:orange", "study": "tab:green"}
+KINDS = {
+    "demonstrations": "tab:purple",
+    "training": "tab:blue",
+    "evaluation": "tab:orange",
+    "study": "tab:green",
+}
 
 
 def stage_kind(name: str) -> str:
-    """``training``, ``evaluation`` or ``study`` for a stage name."""
+    """``demonstrations``, ``training``, ``evaluation`` or ``study`` for a stage name."""
     if name.startswith("eval-"):
         return "evaluation"
+    if name.startswith("demos-"):
+        return "demonstrations"
     return "study" if name == "inference-study" else "training"
 
 

@@ -6,6 +6,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from tolins.bench.demonstrations import DemoStage, demo_stages
 from tolins.bench.profiles import Profile
 from tolins.bench.stages import StageCache, stage_key
 from tolins.bench.table import SB3_METHODS, TRAININGS, Training
@@ -23,9 +24,12 @@ def train_stage(
     pool: CandidatePool | None,
     progress: bool,
     upstream: Path | None,
+    *_demos: Path,
 ) -> Path:
     """A job of :mod:`tolins.bench.executor`: :meth:`Trainer.train` in the cache under
-    ``root`` (RS-GAIL's progress bars if ``progress``); ``policy.pt``."""
+    ``root`` (RS-GAIL's progress bars if ``progress``); ``policy.pt``. The folders of its
+    demonstration stages, when they ran as jobs before it, come last (unused: they are
+    found by their configs)."""
     trainer = Trainer(StageCache(root), profile, backend, progress=progress)
     return trainer.train(name, seed, upstream, pool)[0]
 
@@ -67,6 +71,7 @@ class Trainer:
             config.pop("task")  # no expert, no demonstrations
             config["sb3"] = asdict(self._sb3(training, seed))
             return config
+        config["demos"] = [stage.key for stage in self.demo_stages(name, seed)]
         if training.method == "bc":
             config["bc"] = asdict(self.profile.bc())
         else:
@@ -76,6 +81,14 @@ class Trainer:
         if training.method == "tolerance-guided":
             config["residual"] = asdict(self.profile.residual())
         return config
+
+    def demo_stages(self, name: str, seed: int) -> list[DemoStage]:
+        """The demonstration stages training ``name`` reads (none for deep RL)."""
+        training = TRAININGS[name]
+        if training.method in SB3_METHODS:
+            return []
+        task = self.profile.task(self.backend, training.expert, seed)
+        return demo_stages(training.env_ids, task.expert, task.demonstrations, seed, self.backend)
 
     def stage_name(self, name: str, seed: int) -> str:
         """The stage name of training ``name`` with ``seed``, e.g. ``pi_n_safe-seed0``."""
@@ -121,8 +134,9 @@ class Trainer:
             return
         task = self.profile.task(self.backend, training.expert, seed)
         env_ids = list(training.env_ids)
+        demos = self._demos(training.name, seed, out)
         if training.method == "bc":
-            runs.run_bc(env_ids[0], task, self.profile.bc(), out)
+            runs.run_bc(env_ids[0], task, self.profile.bc(), out, demos=demos)
         elif training.method == "rs-gail":
             runs.run_rs_gail(
                 env_ids[0],
@@ -134,6 +148,7 @@ class Trainer:
                 resume=True,
                 progress=self.progress,
                 pool=pool,
+                demos=demos,
             )
         else:
             runs.run_tolerance_guided(
@@ -146,4 +161,26 @@ class Trainer:
                 resume=True,
                 progress=self.progress,
                 pool=pool,
+                demos=demos,
             )
+
+    def _demos(self, name: str, seed: int, out: Path):
+        """The episodes of training ``name``'s demonstration datasets, in env order (their
+        folders recorded relative to the training's folder ``out``)."""
+        import os
+
+        from tolins.datasets.reader import load_demonstrations
+        from tolins.learning.runs import Demos
+
+        stages = self.demo_stages(name, seed)
+        folders = [stage.dataset(self.cache) for stage in stages]
+        for stage, folder in zip(stages, folders, strict=True):
+            if not self.cache.finished(stage.name, stage.config()):
+                raise FileNotFoundError(f"{folder}: demonstration stage {stage.name} not run")
+        rollouts = [
+            r
+            for s, f in zip(stages, folders, strict=True)
+            for r in load_demonstrations(f, s.env_id)
+        ]
+        source = ",".join(os.path.relpath(f.resolve(), out.resolve()) for f in folders)
+        return Demos(source, rollouts)

@@ -64,11 +64,14 @@ class EpisodeRecord:
     metadata: dict[str, Any]
 
 
-def episode_seeds(seed: int, episodes: int) -> list[int]:
+def episode_seeds(seed: int, episodes: int, stream: int = 0) -> list[int]:
     """The episode seeds of a dataset with ``seed``: the ones ``tolins train --seed SEED``
-    draws for its (first) env's demonstrations (:func:`tolins.learning.runs.demonstrations`),
-    so that a safe-expert dataset of the same seed holds the very same episodes."""
-    state = np.random.SeedSequence([seed * 1000, 0xDE70]).generate_state(episodes)
+    draws for the demonstrations on its env number ``stream`` (0: the first;
+    :func:`tolins.learning.runs.demonstrations`), so that a safe-expert dataset of the same
+    seed holds the very same episodes."""
+    if not 0 <= stream < 1000:
+        raise ValueError(f"stream={stream}; allowed: 0 <= stream < 1000 (an env's index)")
+    state = np.random.SeedSequence([seed * 1000 + stream, 0xDE70]).generate_state(episodes)
     return [int(s) for s in state]
 
 
@@ -141,13 +144,15 @@ def write_dataset(
     env_kwargs: dict[str, Any] | None = None,
     description: str = "",
     on_episode: Callable[[EpisodeRecord], None] | None = None,
+    stream: int = 0,
 ) -> Path:
     """Write ``episodes`` episodes of ``env_id`` on ``backend`` to ``ROOT/NAME`` (episode
-    ``i`` acts with ``sources[i % len(sources)]``, seeded by :func:`episode_seeds`).
-    ``env_kwargs`` go to the env (``socket=`` for ``tolins/Insert-v1``) and into its spec.
+        ``i`` acts with ``sources[i % len(sources)]``, seeded by :func:`episode_seeds`).
+        ``env_kwargs`` go to the env (``socket=`` for ``tolins/Insert-v1``) and into its spec;
+    ``stream`` picks the seeds of a training's env number ``stream`` (:func:`episode_seeds`).
 
-    The dataset is built in a hidden folder beside its place and renamed onto it at the
-    end: on any error or Ctrl-C the hidden folder is removed and nothing is left.
+        The dataset is built in a hidden folder beside its place and renamed onto it at the
+        end: on any error or Ctrl-C the hidden folder is removed and nothing is left.
     """
     from minari.dataset.minari_storage import MinariStorage
 
@@ -163,14 +168,15 @@ def write_dataset(
             action_space=env.action_space,
             env_spec=spec,
         )
-        for index, seed_i in enumerate(episode_seeds(seed, episodes)):
+        for index, seed_i in enumerate(episode_seeds(seed, episodes, stream)):
             source = sources[index % len(sources)]
             record = record_episode(env, source.make(seed_i), seed_i, source.name, index)
             storage.update_episodes([record.buffer])
             storage.update_episode_metadata([record.metadata], [index])
             if on_episode is not None:
                 on_episode(record)
-        storage.update_metadata(_metadata(name, env_id, backend, seed, sources, description))
+        metadata = _metadata(name, env_id, backend, seed, sources, description)
+        storage.update_metadata({**metadata, "tolins_stream": int(stream)})
         os.rename(temp, target)
     except BaseException:
         shutil.rmtree(temp, ignore_errors=True)

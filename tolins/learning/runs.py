@@ -137,8 +137,10 @@ def run_tolerance_guided(
     resume: bool = False,
     progress: bool = True,
     pool: CandidatePool | None = None,
+    demos: Demos | None = None,
 ) -> RSGailResult:
-    """π_φ: φ2 by RS-GAIL over ``env_ids`` with φ1 from the nominal policy file ``nominal``."""
+    """π_φ: φ2 by RS-GAIL over ``env_ids`` with φ1 from the nominal policy file ``nominal``,
+    imitating the expert on every env (or the episodes of ``demos``, in env order)."""
     out = Path(out)
     metadata = run_metadata(
         task.seed,
@@ -147,6 +149,7 @@ def run_tolerance_guided(
         task=task,
         rs_gail=rs_gail,
         residual=residual,
+        **_demos_metadata(demos),
     )
     if resume:
         check_resumable(out, metadata)
@@ -154,7 +157,7 @@ def run_tolerance_guided(
     result = train_tolerance_guided(
         policy,
         workpieces(env_ids),
-        demonstrations(env_ids, task),
+        demonstrations(env_ids, task) if demos is None else demos.rollouts,
         rs_gail,
         residual,
         seed=task.seed,

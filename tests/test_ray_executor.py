@@ -136,7 +136,9 @@ def test_ray_executor_gives_the_local_executors_results(local_ray, local_outputs
     assert _outputs(tmp_path) == local_outputs
     stages = json.loads((tmp_path / "run.json").read_text())["stages"]
     assert set(stages) == set(run.stage_times)
-    assert len(stages) == 7  # 3 trainings (bc_safe, pi_n_safe, pi_phi_circle), 3 evals, study
+    # 2 demonstration datasets (2*2, 2*8), 3 trainings (bc_safe, pi_n_safe, pi_phi_circle),
+    # 3 evaluations, the study
+    assert len(stages) == 9
     assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
     assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
 

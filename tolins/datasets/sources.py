@@ -80,7 +80,10 @@ def make_source(entry: str, socket: SocketSpec, *, env_id: str, backend: str, se
         return Source("bc", lambda _: policy)
     from tolins.learning.actors import make_actor
 
-    actor = make_actor(entry, socket)
+    try:
+        actor = make_actor(entry, socket)
+    except ValueError as error:  # name the dataset's own two policies too
+        raise ValueError(f"{error}; or random, bc (module tolins.datasets.sources)") from None
     return Source(entry, lambda _: actor)
 
 

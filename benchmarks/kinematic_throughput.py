@@ -5,7 +5,7 @@ Usage::
     python benchmarks/kinematic_throughput.py            # full run, about 10 s
     python benchmarks/kinematic_throughput.py --quick    # a second or two, a smoke test
 
-A :class:`~tolins.envs.kinematic_backend.KinematicBatch` of ``--batch`` workpieces (256)
+A :class:`~tolins.envs.kinematic_batch.KinematicBatch` of ``--batch`` workpieces (256)
 steps ``--steps`` control steps (40 = one episode) from a reset, in three regimes:
 
 * ``free``: in the air (``z`` 15–18 mm), random actions: no step checks collisions;
@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 from tolins import CircularSocket, PolygonSocket  # noqa: E402
 from tolins.envs import InitialPoseDistribution  # noqa: E402
-from tolins.envs.kinematic_backend import KinematicBatch  # noqa: E402
+from tolins.envs.kinematic_batch import KinematicBatch  # noqa: E402
 from tolins.paper import A_MAX, CONTROL_DT  # noqa: E402
 
 SOCKETS = {
@@ -77,11 +77,12 @@ def _actions(regime: str, n: int, steps: int, seed: int) -> np.ndarray:
 
 
 def _block(batch: KinematicBatch, regime: str, start: np.ndarray, steps: int, seed: int) -> float:
-    actions = _actions(regime, batch.n, steps, seed)
-    state = batch.reset(start)
+    ids = np.arange(batch.num_envs)
+    actions = _actions(regime, batch.num_envs, steps, seed)
+    state = batch.reset(ids, start)
     begin = time.perf_counter()
     for k in range(steps):
-        state = batch.step(_efficient(state.pose) if regime == "expert" else actions[k])
+        state = batch.step(ids, _efficient(state.pose) if regime == "expert" else actions[k])
     return time.perf_counter() - begin
 
 
@@ -116,12 +117,13 @@ def main() -> None:
 
 def _count_stops(batch: KinematicBatch, regime: str, start: np.ndarray, steps: int) -> str:
     """How many of the block's workpiece steps stopped at a collision."""
-    state, stops = batch.reset(start), 0
-    actions = _actions(regime, batch.n, steps, 0)
+    ids = np.arange(batch.num_envs)
+    state, stops = batch.reset(ids, start), 0
+    actions = _actions(regime, batch.num_envs, steps, 0)
     for k in range(steps):
-        state = batch.step(_efficient(state.pose) if regime == "expert" else actions[k])
+        state = batch.step(ids, _efficient(state.pose) if regime == "expert" else actions[k])
         stops += int(np.count_nonzero(state.peak_force))
-    return f"{stops}/{batch.n * steps}"
+    return f"{stops}/{batch.num_envs * steps}"
 
 
 if __name__ == "__main__":

@@ -47,10 +47,8 @@ import mujoco
 import numpy as np
 
 from tolins.envs.backend import BackendState
-from tolins.envs.batch import BatchState
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import contains, pin_levels, pins_inside_pose
-from tolins.geometry.validation import check_int, checked_array
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
 from tolins.mjcf import make_mjcf
 
@@ -180,46 +178,7 @@ def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
     return wrench
 
 
-class KinematicBatch:
-    """``n`` workpieces of one socket stepped at once with the kinematic model.
-
-    Args:
-        spec: The socket (every workpiece has the same, defects included).
-        n: Number of workpieces.
-        control_dt: Control period (s).
-    """
-
-    def __init__(self, spec: SocketSpec, n: int, control_dt: float) -> None:
-        self.spec = spec
-        self.n = check_int("n", n, minimum=1)
-        self.control_dt = float(control_dt)
-        self._pose = np.zeros((self.n, 4))
-
-    @property
-    def pose(self) -> np.ndarray:
-        """The current poses ``(n, 4)`` (a copy)."""
-        return self._pose.copy()
-
-    def reset(self, poses: object) -> BatchState:
-        """Place the workpieces at ``poses`` ``(n, 4)``; raises if one is inside the board."""
-        poses = checked_array("poses", poses, (self.n, 4), "[x, y, theta, z] per workpiece")
-        inside = colliding(self.spec, poses)
-        if inside.any():
-            row = int(np.argmax(inside))
-            raise ValueError(
-                f"poses[{row}]={poses[row].tolist()!r} puts a pin inside the board; allowed: "
-                "z ≥ 0, or z < 0 with [x, y, theta] in the tolerance"
-            )
-        self._pose = poses.copy()
-        return BatchState(self._pose.copy(), np.zeros((self.n, 4)), np.zeros(self.n))
-
-    def step(self, velocities: object) -> BatchState:
-        """Command ``velocities`` ``(n, 4)`` = ``[ux, uy, utheta, uz]`` for one control period."""
-        velocities = checked_array("velocities", velocities, (self.n, 4), "[ux, uy, utheta, uz]")
-        self._pose, wrench, collided = kinematic_step(
-            self.spec, self._pose, velocities, self.control_dt
-        )
-        return BatchState(self._pose.copy(), wrench, np.where(collided, CONTACT_FORCE, 0.0))
+_ONE = np.zeros(1, dtype=np.intp)  # the batch row of a single backend
 
 
 class KinematicBackend:
@@ -230,16 +189,18 @@ class KinematicBackend:
     """
 
     def __init__(self, spec: SocketSpec, control_dt: float) -> None:
+        from tolins.envs.kinematic_batch import KinematicBatch  # built on this module
+
         self.spec = spec
         self._batch = KinematicBatch(spec, 1, control_dt)
         self._model: mujoco.MjModel | None = None
         self._data: mujoco.MjData | None = None
 
     def reset(self, pose: np.ndarray) -> BackendState:
-        return self._batch.reset(np.reshape(pose, (1, 4))).row(0)
+        return self._batch.reset(_ONE, np.reshape(pose, (1, 4))).row(0)
 
     def step(self, velocity: np.ndarray) -> BackendState:
-        return self._batch.step(np.reshape(velocity, (1, 4))).row(0)
+        return self._batch.step(_ONE, np.reshape(velocity, (1, 4))).row(0)
 
     @property
     def model(self) -> mujoco.MjModel:

@@ -1,9 +1,10 @@
 """The paper's simulator for many workpieces at once: one numpy call per workpiece shape.
 
-:class:`KinematicBatchPhysics` is the :class:`~tolins.envs.batch.BatchPhysics` of the
-vector env on the kinematic backend. The simulations that step together and share a
-workpiece (every one, unless bent pins are drawn per episode) move in one call of
-:func:`~tolins.envs.kinematic_backend.kinematic_step`, whose rows are independent: each
+:class:`KinematicBatch` is the :class:`~tolins.envs.batch.BatchPhysics` of the vector env
+on the kinematic backend, and the single env's kinematic backend is a batch of one
+(:class:`~tolins.envs.kinematic_backend.KinematicBackend`). The simulations that step
+together and share a workpiece (every one, unless bent pins are drawn per episode) move
+in one call of :func:`~tolins.envs.kinematic_backend.kinematic_step`, whose rows are independent: each
 is the single env's step bit for bit.
 """
 
@@ -13,12 +14,12 @@ import numpy as np
 
 from tolins.envs.batch import BatchState
 from tolins.envs.episode import check_control_dt
-from tolins.envs.kinematic_backend import CONTACT_FORCE, kinematic_step
+from tolins.envs.kinematic_backend import CONTACT_FORCE, colliding, kinematic_step
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 
 
-class KinematicBatchPhysics:
+class KinematicBatch:
     """``num_envs`` kinematic workpieces, each of its own socket (default the nominal).
 
     Args:
@@ -39,8 +40,22 @@ class KinematicBatchPhysics:
     def set_physics(self, index: int, draw: object) -> None:
         """Nothing: the kinematic model has no friction, stiffness or servos."""
 
+    @property
+    def pose(self) -> np.ndarray:
+        """The current poses ``(num_envs, 4)`` (a copy)."""
+        return self._pose.copy()
+
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        """Place workpiece ``ids[k]`` at ``poses[k]``; ``ValueError`` if one is inside the
+        board."""
         ids = np.asarray(ids, dtype=np.intp)
+        poses = np.asarray(poses, dtype=float)
+        for row, i in enumerate(ids.tolist()):
+            if colliding(self._sockets[i], poses[row][None])[0]:
+                raise ValueError(
+                    f"poses[{row}]={poses[row].tolist()!r} puts a pin inside the board; "
+                    "allowed: z ≥ 0, or z < 0 with [x, y, theta] in the tolerance"
+                )
         self._pose[ids] = poses
         n = len(ids)
         return BatchState(self._pose[ids], np.zeros((n, 4)), np.zeros(n))

@@ -50,9 +50,9 @@ def make_batch_physics(
 
         return MujocoBatch(socket, num_envs, control_dt, num_threads)
     if backend == "kinematic":
-        from tolins.envs.kinematic_batch import KinematicBatchPhysics
+        from tolins.envs.kinematic_batch import KinematicBatch
 
-        return KinematicBatchPhysics(socket, num_envs, control_dt)
+        return KinematicBatch(socket, num_envs, control_dt)
     from tolins.envs.warp_batch import WarpBatch  # raises a clear ImportError without warp
 
     return WarpBatch(socket, num_envs, control_dt, device=device or "cpu")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 
@@ -59,6 +60,8 @@ def evaluate(
     recorded: int = 0,
     policy_name: str | None = None,
     vectorized: bool = True,
+    env_kwargs: dict[str, Any] | None = None,
+    inference_sigma: float | None = None,
 ) -> list[Episode]:
     """Run the policy ``entry`` (a name for :func:`tolins.learning.actors.make_actor`, or
     an actor ``observation -> action``) on ``env_id`` from each seed; the first
@@ -67,21 +70,24 @@ def evaluate(
 
     ``inference=True`` wraps the policy in
     :class:`tolins.inference.adaptive.InferenceGuidedPolicy` with binary outcomes (the
-    paper's π_φ*), reset before every episode.
+    paper's π_φ*), reset before every episode; its prior std of the pins' offsets is
+    ``inference_sigma`` (mm; default the env's ``defect_sigma``).
 
     With ``vectorized`` (the default) the episodes after the recorded ones run side by
     side in a vector env (:func:`tolins.rollouts.runner.run_jobs`: the same episodes bit
     for bit); the policy must then hold no state between calls, as the experts, ``tolins
     train`` policies and SB3 models do. ``vectorized=False`` runs one episode after
-    another (a policy with memory).
+    another (a policy with memory). ``env_kwargs`` go to every env made (``defects=``,
+    ``randomization=``, ...).
     """
-    env = gym.make(env_id, backend=backend)
+    env_kwargs = dict(env_kwargs or {})
+    env = gym.make(env_id, backend=backend, **env_kwargs)
     actor = make_actor(entry, env.unwrapped.nominal_socket) if isinstance(entry, str) else entry
     wrapper = None
     if inference:
         from tolins.inference.adaptive import InferenceGuidedPolicy
 
-        wrapper = actor = InferenceGuidedPolicy(actor, env, contact=False)
+        wrapper = actor = InferenceGuidedPolicy(actor, env, contact=False, sigma=inference_sigma)
     recorder = None
     if record is not None and recorded > 0:
         from tolins.record import RerunRecorder
@@ -107,7 +113,7 @@ def evaluate(
         env.close()
     rest = seeds[sequential:]
     if rest:
-        envs = VectorEnvCache(backend, num_envs=min(len(rest), VECTOR_SLOTS))
+        envs = VectorEnvCache(backend, num_envs=min(len(rest), VECTOR_SLOTS), env_kwargs=env_kwargs)
         try:
             jobs = [Job(env_id, actor, seed) for seed in rest]
             episodes += [episode for _, episode in run_jobs(envs, jobs)]

@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -40,15 +41,23 @@ class VectorEnvCache:
         backend: ``"mujoco"``, ``"kinematic"`` (or ``"warp"``).
         num_envs: Slots per env id.
         num_threads: Threads of each MuJoCo batch (default: every core).
+        env_kwargs: Further keywords of every env (e.g. ``defects=``, ``randomization=``).
     """
 
-    def __init__(self, backend: str, num_envs: int = 16, num_threads: int | None = None) -> None:
+    def __init__(
+        self,
+        backend: str,
+        num_envs: int = 16,
+        num_threads: int | None = None,
+        env_kwargs: dict[str, Any] | None = None,
+    ) -> None:
         self.backend, self.num_envs, self.num_threads = backend, num_envs, num_threads
+        self.env_kwargs = dict(env_kwargs or {})
         self._envs: dict[str, InsertionVectorEnv] = {}
 
     def get(self, env_id: str) -> InsertionVectorEnv:
         if env_id not in self._envs:
-            kwargs = {"backend": self.backend, "autoreset_mode": "Disabled"}
+            kwargs = {**self.env_kwargs, "backend": self.backend, "autoreset_mode": "Disabled"}
             if self.backend == "mujoco":
                 kwargs["num_threads"] = self.num_threads
             self._envs[env_id] = make_vec(check_env_id(env_id), self.num_envs, **kwargs).unwrapped

@@ -173,9 +173,9 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
-    # 5 demonstration datasets, 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study:
-    # none ran again
-    assert len(again.cached) == 37
+    # 5 demonstration datasets, 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study, 5
+    # robustness stages: none ran again
+    assert len(again.cached) == 42
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
@@ -217,7 +217,9 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
 
     def config(folder: str) -> BenchConfig:
         out = str(tmp_path / folder)
-        return BenchConfig(profile="tiny", backend="kinematic", rows="C2.2,C2.3", out=out)
+        return BenchConfig(
+            profile="tiny", backend="kinematic", rows="C2.2,C2.3", out=out, robustness=False
+        )
 
     def quiet(config: BenchConfig):
         return run_bench(config, progress=False, log=lambda _: None)

@@ -137,8 +137,8 @@ def test_ray_executor_gives_the_local_executors_results(local_ray, local_outputs
     stages = json.loads((tmp_path / "run.json").read_text())["stages"]
     assert set(stages) == set(run.stage_times)
     # 2 demonstration datasets (2*2, 2*8), 3 trainings (bc_safe, pi_n_safe, pi_phi_circle),
-    # 3 evaluations, the study
-    assert len(stages) == 9
+    # 3 evaluations, the study, 5 robustness stages (tolins.bench.robustness)
+    assert len(stages) == 14
     assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
     assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
 

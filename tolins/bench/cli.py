@@ -43,6 +43,9 @@ def add_bench_parser(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--workers", type=positive_int, default=2, help="evaluation threads")
     bench.add_argument("--no-study", action="store_true", help="skip the inference study")
     bench.add_argument(
+        "--no-robustness", action="store_true", help="skip the robustness table (grades, defects)"
+    )
+    bench.add_argument(
         "--executor",
         default="local",
         choices=EXECUTORS,
@@ -67,6 +70,7 @@ def _run(args: argparse.Namespace) -> int:
             seeds=args.seeds,
             out=str(out),
             study=not args.no_study,
+            robustness=not args.no_robustness,
             workers=args.workers,
             executor=args.executor,
             address=args.address,

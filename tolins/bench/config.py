@@ -32,6 +32,7 @@ class BenchConfig:
         seeds: Training seeds; ``None``: the profile's.
         out: Output folder.
         study: Run the inference study.
+        robustness: Run the robustness table (:mod:`tolins.bench.robustness`).
         workers: Threads evaluating rows side by side (results do not depend on it).
         executor: ``local`` (this process) or ``ray`` (Ray tasks; ``tolins[ray]``): where
             the stages run (:mod:`tolins.bench.executor`; results do not depend on it).
@@ -45,6 +46,7 @@ class BenchConfig:
     seeds: int | None = None
     out: str = "bench"
     study: bool = True
+    robustness: bool = True
     workers: int = 2
     executor: str = "local"
     address: str | None = None
@@ -84,3 +86,5 @@ class BenchRun:
     stage_times: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per stage: ``started``/``finished`` (Unix time), ``wall_s``, ``cached``, and where it
     ran (``host``, ``pid``; ``node``: the Ray node id or ``None``; ``thread``)."""
+    robustness: dict[str, Any] | None = None
+    """``results.json["robustness"]`` (:func:`tolins.bench.robustness.robustness_results`)."""

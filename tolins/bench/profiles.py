@@ -31,6 +31,8 @@ class Profile:
             ``None``: :attr:`rs_gail_env_steps`, RS-GAIL's own budget for π_n.
         rl_reward_mode: The reward the baselines learn from (evaluated with the sparse one).
         rl_curve_points: Points of each baseline's learning curve.
+        robustness_episodes: Episodes per cell of the robustness table (policy ×
+            condition, :mod:`tolins.bench.robustness`) and training seed.
     """
 
     name: str
@@ -49,6 +51,7 @@ class Profile:
     rl_env_steps: int | None = None
     rl_reward_mode: str = "dense"
     rl_curve_points: int = 10
+    robustness_episodes: int = 10
 
     @property
     def rs_gail_env_steps(self) -> int:
@@ -103,12 +106,29 @@ PROFILES: dict[str, Profile] = {
     # The paper's budgets: 100 RS-GAIL iterations, 100 evaluation episodes, 500 workpieces;
     # 5 training seeds, the unit of the verdicts' intervals (tolins.bench.statistics).
     # The deep-RL baselines get RS-GAIL's budget for π_n: 100 × (16 × 4 + 8) × 40 = 288,000.
-    "paper": Profile("paper", 50, 200, 100, 100, 16, 4, 8, 100, 5, 500, 3),
+    "paper": Profile("paper", 50, 200, 100, 100, 16, 4, 8, 100, 5, 500, 3, robustness_episodes=20),
     # About 15 min on 2 cores with three training seeds (the unit of the verdicts): a third
     # of the paper's per-seed budgets (10 RS-GAIL iterations for π_n, 8 for φ2), 50
     # evaluation episodes per row and seed; the baselines get 3,000 env steps each
-    # (RS-GAIL's π_n: 28,800), the start of their curves only (benchmarks/README.md).
+    # (RS-GAIL's π_n: 28,800), the start of their curves only (benchmarks/README.md);
+    # 10 episodes per robustness cell and seed (the default; 50 cells, docs/benchmark.md).
     "quick": Profile("quick", 50, 200, 10, 8, 16, 4, 8, 50, 3, 500, 2, rl_env_steps=3_000),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
-    "tiny": Profile("tiny", 4, 5, 1, 1, 4, 1, 2, 2, 1, 6, 1, rl_env_steps=200, rl_curve_points=1),
+    "tiny": Profile(
+        "tiny",
+        4,
+        5,
+        1,
+        1,
+        4,
+        1,
+        2,
+        2,
+        1,
+        6,
+        1,
+        rl_env_steps=200,
+        rl_curve_points=1,
+        robustness_episodes=1,
+    ),
 }

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from tolins.atomic import atomic_json, atomic_write
-from tolins.bench import plots
+from tolins.bench import plots, robustness
 from tolins.bench.baselines import env_step_curves
 from tolins.bench.claims import ClaimCheck
 from tolins.bench.config import BACKENDS, RECORDING, BenchRun
@@ -35,6 +35,8 @@ def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
         run.results, source="bench", backend=backend, profile=run.config.profile
     )
     document["claims"] = {check.claim.name: check.to_json() for check in run.claims}
+    if run.robustness is not None:
+        document[robustness.KEY] = run.robustness
     written = [
         atomic_json(out / "results.json", document),
         atomic_json(out / f"results.{backend}.json", document),
@@ -46,6 +48,10 @@ def write_reports(run: BenchRun, trainer: Trainer, seeds: int) -> list[Path]:
         (out / "inference.json").unlink(missing_ok=True)
         (out / "inference_study.png").unlink(missing_ok=True)
     written += _recordings(run, out)
+    if run.robustness is not None:
+        written.append(robustness.plot_robustness(out / "robustness.png", run.robustness))
+    else:  # an earlier run's table would read as this run's
+        (out / "robustness.png").unlink(missing_ok=True)
     written += _figures(run, trainer, out)
     written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
     text = format_markdown(run, _other_backend(out, backend))
@@ -284,6 +290,7 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
 
         parts += ["", "## Inference study", "", format_study(run.study), ""]
         parts += ["![inference study](inference_study.png)"]
+    parts += robustness.format_section(run.robustness)
     if other is not None:
         parts += [
             "",

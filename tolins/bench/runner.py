@@ -30,6 +30,7 @@ from tolins.bench.lock import locked_folder
 from tolins.bench.profiles import PROFILES, Profile
 from tolins.bench.report import write_reports
 from tolins.bench.results import row_entry
+from tolins.bench.robustness import PREFIX, plan_robustness, robustness_results
 from tolins.bench.stages import StageCache
 from tolins.bench.table import TRAININGS, Row, select_rows
 from tolins.bench.timeline import write_timeline
@@ -69,6 +70,8 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         pool = executor.candidate_pool()
         _plan_trainings(plan, trainer, rows, seeds, pool, progress and local, log)
         _plan_evaluations(plan, trainer, rows, seeds)
+        if config.robustness:
+            plan_robustness(plan, trainer, seeds)
         if config.study:
             workers = 2 if local else 1  # a Ray task holds one CPU
             args = (out, profile, config.backend, workers, progress and local)
@@ -110,6 +113,8 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         if not isinstance(run.study, dict):
             path = run.stage_folders["inference-study"] / STUDY
             raise StageFileError(f"{path}: not an inference study; delete its folder to rerun")
+    if config.robustness:
+        run.robustness = robustness_results(run.stage_folders, profile, seeds)
     run.wall_s = time.perf_counter() - began
     write_reports(run, trainer, seeds)
     write_timeline(out, run)
@@ -243,6 +248,8 @@ def _log_done(
         bar.update()
     elif job.name.startswith("demos-"):
         log(f"{job.name}: {job.args[1].episodes} episodes written ({cache.wall_s(result):.0f} s)")
+    elif job.name.startswith(PREFIX):
+        log(f"{job.name}: evaluated ({cache.wall_s(result):.0f} s)")
     elif job.name != "inference-study":
         log(f"{job.name}: trained ({cache.wall_s(result.parent):.0f} s)")
 

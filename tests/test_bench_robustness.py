@@ -1,0 +1,114 @@
+"""The bench's robustness table (tolins.bench.robustness): tiny runs end to end, cached."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from tolins.bench import robustness
+from tolins.bench.config import BenchConfig
+from tolins.bench.evaluation import eval_seeds, evaluate_row
+from tolins.bench.profiles import PROFILES
+from tolins.bench.robustness import CONDITIONS, KEY, POLICIES
+from tolins.bench.runner import run_bench
+from tolins.bench.table import ROWS
+from tolins.cli import main
+
+TINY = PROFILES["tiny"]
+
+
+def _png_size(path):
+    import matplotlib.image
+
+    image = matplotlib.image.imread(path)
+    return image.shape[0] * image.shape[1]
+
+
+def test_conditions_are_the_grades_the_defect_kinds_and_random_physics():
+    assert [c.id for c in CONDITIONS] == [
+        *("fit200", "fit100", "fit50", "fit20"),
+        *("bent", "pitch", "burr", "short", "blocked"),
+        "physics",
+    ]
+    assert [c.clearance_um for c in CONDITIONS[:4]] == [200, 100, 50, 20]
+    assert CONDITIONS[0].env_id == "tolins/Circle2x2-v1"
+    assert CONDITIONS[2].env_id == "tolins/Circle2x2Fit50-v1"
+    assert CONDITIONS[8].env_kwargs == {"defects": ("blocked", None)}
+    assert not CONDITIONS[8].vectorizable("mujoco") and CONDITIONS[8].vectorizable("kinematic")
+    assert [p.label for p in POLICIES] == ["π_e^safe", "π_e^eff", "π_n", "π_φ", "π_φ*"]
+    assert POLICIES[-1].inference and POLICIES[-1].agent == POLICIES[-2].agent
+
+
+def test_the_stage_key_sees_the_trained_policy_and_the_episodes():
+    def config(stage, profile=TINY):
+        return robustness.stage_config(POLICIES[2], 0, stage, profile, "mujoco")
+
+    assert config("pi_n_safe-seed0-aaa") != config("pi_n_safe-seed0-bbb")
+    assert config("x")["seeds"] == eval_seeds(0, TINY.robustness_episodes)
+    assert config("x", PROFILES["quick"])["seeds"] != config("x")["seeds"]
+    assert 1 <= TINY.robustness_episodes <= 2 < PROFILES["quick"].robustness_episodes
+
+
+def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tmp_path):
+    config = BenchConfig(
+        profile="tiny", backend="kinematic", rows="C2.1,C2.3,C4.2", out=str(tmp_path), study=False
+    )
+    run = run_bench(config, progress=False, log=lambda _: None)
+    names = [robustness.stage_name(p, 0) for p in POLICIES]
+    assert all(name in run.stage_folders for name in names)
+    assert not any(name in run.cached for name in names)
+    table = run.robustness
+    assert [p["id"] for p in table["policies"]] == [p.id for p in POLICIES]
+    for policy in POLICIES:
+        cells = table["cells"][policy.id]
+        assert list(cells) == [c.id for c in CONDITIONS]
+        assert cells["blocked"]["success_mean"] == 0.0  # a plugged hole never inserts
+        assert cells["blocked"]["success_ci"] == [0.0, 0.0]
+        assert all(cell["episodes"] == TINY.robustness_episodes for cell in cells.values())
+        assert cells["fit20"]["clearance_um"] == 20
+    # The 200 µm cell is the table row's first episodes (same seeds, same env).
+    assert table["cells"]["safe"]["fit200"]["reward_per_episode"] == [
+        run.results["C2.1"]["reward_per_episode"][0][: TINY.robustness_episodes]
+    ]
+    document = json.loads((tmp_path / "results.json").read_text())
+    assert document[KEY]["cells"]["pi_phi_star"]["burr"]["ci_over"] == "episodes"
+    text = (tmp_path / "results.md").read_text()
+    assert "## Robustness (beyond the paper)" in text and "| π_φ* |" in text
+    assert _png_size(tmp_path / "robustness.png") > 0
+
+    again = run_bench(config, progress=False, log=lambda _: None)
+    assert all(name in again.cached for name in names)
+    assert again.robustness == table
+
+    # Without the table: no key, no plot, and tolins compare reads both documents.
+    without = replace(config, robustness=False, out=str(tmp_path / "b"))
+    run_bench(without, progress=False, log=lambda _: None)
+    assert KEY not in json.loads((tmp_path / "b" / "results.json").read_text())
+    assert not (tmp_path / "b" / "robustness.png").exists()
+    assert main(["compare", str(tmp_path), str(tmp_path / "b")]) == 0
+
+
+def test_only_the_experts_when_the_rows_train_no_circle_policy(tmp_path):
+    config = BenchConfig(
+        profile="tiny", backend="kinematic", rows="C1.1", out=str(tmp_path), study=False
+    )
+    run = run_bench(config, progress=False, log=lambda _: None)
+    assert [p["id"] for p in run.robustness["policies"]] == ["safe", "efficient"]
+
+
+def test_an_expert_on_mujoco_fails_blocked_holes_and_repeats_its_row(tmp_path):
+    safe = POLICIES[0]
+    folder = robustness.robustness_stage(tmp_path, safe, 0, TINY, "mujoco", None)
+    episodes = robustness._stage_episodes(folder, TINY.robustness_episodes)
+    assert [e.success for e in episodes["blocked"]] == [False] * TINY.robustness_episodes
+    row = next(r for r in ROWS if r.id == "C2.1")
+    expected = evaluate_row(row, None, "mujoco", eval_seeds(0, TINY.robustness_episodes))
+    assert [e.reward for e in episodes["fit200"]] == pytest.approx([e.reward for e in expected])
+    again = robustness.robustness_stage(tmp_path, safe, 0, TINY, "mujoco", None)
+    assert again == folder
+    results = robustness.robustness_results({robustness.stage_name(safe, 0): folder}, TINY, 1)
+    assert list(results["cells"]) == ["safe"]
+    path = robustness.plot_robustness(tmp_path / "robustness.png", results)
+    assert _png_size(path) > 0

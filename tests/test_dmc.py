@@ -78,6 +78,9 @@ def test_suite_is_built_from_the_task_table() -> None:
         (("square", "insert", {"horizon": 0}), "horizon"),
         (("square", "insert", {"defect_sigma": 0.1}), "defect_sigma"),
         (("square", "insert", {"random": "x"}), "random"),
+        (("square", "insert", {"defects": ("burr", 0.05)}), "defects.*CircularSocket"),
+        (("circle2x2", "insert", {"defects": ("cracked", 0.1)}), "unknown.*pitch, burr"),
+        (("circle2x2", "insert", {"defects": ("blocked", 0.1)}), "None"),
     ],
 )
 def test_unknown_names_and_bad_kwargs_raise(args: tuple, match: str) -> None:
@@ -193,6 +196,36 @@ def test_out_of_range_actions_are_clipped() -> None:
     sign = np.array([1, -1, 1, -1])
     big, limit = envs[0].step(10 * A_MAX * sign), envs[1].step(A_MAX * sign)
     assert np.array_equal(_flat(big.observation), _flat(limit.observation))
+
+
+@pytest.mark.parametrize(
+    "defects", [("pitch", 0.005), ("burr", 0.05), ("short", 0.3), ("blocked", None)]
+)
+def test_defects_draw_the_gym_envs_workpiece_and_replay_its_episode(defects) -> None:
+    """``defects=(kind, sigma)``: the same seed draws the gym env's defective workpiece,
+    and the same actions give its observations, rewards, poses and ends."""
+    gym_env = InsertionEnv(**TASK_BY_DOMAIN["circle2x2"].env_kwargs, defects=defects)
+    env = dmc.load("circle2x2", "insert", task_kwargs={"random": 5, "defects": defects})
+    rng = np.random.default_rng(0)
+    for episode in range(2):
+        observation, _ = gym_env.reset(seed=5 if episode == 0 else None)
+        assert np.array_equal(_flat(env.reset().observation), observation)
+        assert env.task.socket == gym_env.socket and env.task.socket.is_defective
+        pins = env.physics.named.model.geom_pos["pin0"]
+        assert np.array_equal(pins, gym_env.unwrapped.backend.model.geom("pin0").pos)
+        for _ in range(HORIZON):
+            action = np.append(rng.uniform(-A_MAX[:3], A_MAX[:3]) * 0.3, -A_MAX[3])
+            observation, reward, terminated, truncated, info = gym_env.step(action)
+            timestep = env.step(action)
+            assert np.array_equal(_flat(timestep.observation), observation)
+            assert timestep.reward == reward
+            assert np.array_equal(env.physics.pose(), info["pose"])
+            assert timestep.last() == (terminated or truncated)
+            if timestep.last():
+                break
+        assert env.task.score.collisions == info["n_collisions"]
+    with pytest.raises(ValueError, match=r"pose=.*\(defects\).*z ≥ 0"):
+        dmc.load("circle2x2", "insert", task_kwargs={"pose": [0, 0, 0, -0.5], "defects": defects})
 
 
 def test_defective_domain_rebuilds_the_physics_with_a_new_workpiece() -> None:

@@ -70,7 +70,11 @@ class Insert(control.Task):
     with ``defect_sigma`` it is refused, as a bent workpiece may not fit there.
     ``randomization`` draws the episode's physics as the gym env's does (after the
     workpiece, before the pose; :mod:`tolins.envs.randomization`), applied to the physics'
-    model; the draw is :attr:`physics_draw`.
+    model; the draw is :attr:`physics_draw`. ``defects=(kind, sigma)`` draws another kind
+    of defect every episode, as the gym env's ``defects`` (after any bend;
+    :func:`~tolins.geometry.defects.sample_defects`: ``pitch``, ``burr``, ``short``,
+    ``blocked`` with sigma ``None``; a circular socket only), the physics rebuilt from the
+    drawn workpiece; a fixed ``pose`` in the holes is refused with it as with ``defect_sigma``.
 
     **Failed reset**: a reset validates the episode (workpiece, pose) before it changes
     anything; if it raises (e.g. a ``pose`` set on the task since that is out of range),
@@ -93,6 +97,7 @@ class Insert(control.Task):
         collision_force: float = 0.5,
         reward_mode: str = "sparse",
         randomization: Any = None,
+        defects: Any = None,
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -106,16 +111,19 @@ class Insert(control.Task):
             initial_pose=initial_pose,
             reward_mode=reward_mode,
             randomization=randomization,
+            defects=defects,
         )
         self.socket = socket
         self.physics_draw = None
         self.goal = check_goal(goal)
         self.pose = None if pose is None else check_pose(socket, pose)
-        if self.pose is not None and self.pose[3] < 0 and defect_sigma is not None:
-            raise ValueError(
-                f"pose={self.pose.tolist()!r} has the pins in the holes, which a bent "
-                "workpiece (defect_sigma) may not fit; allowed with defect_sigma: z ≥ 0"
-            )
+        if self.pose is not None and self.pose[3] < 0:
+            for name, value in (("defect_sigma", defect_sigma), ("defects", defects)):
+                if value is not None:
+                    raise ValueError(
+                        f"pose={self.pose.tolist()!r} has the pins in the holes, which a "
+                        f"defective workpiece ({name}) may not fit; allowed with {name}: z ≥ 0"
+                    )
         self.random = _generator(random)
         self.score = EpisodeScore(self.settings)
         self.last_score = NO_SCORE

@@ -202,24 +202,27 @@ def test_bad_histories_raise() -> None:
 
 
 def test_tiny_study_schema_ranking_and_worker_independence() -> None:
-    config = StudyConfig(samples=12, seed=3, particles=300, workers=1)
+    config = StudyConfig(samples=12, seed=3, particles=300, workers=1, kind_samples=2)
     result = run_study(config)
     data = result.to_json()
-    assert set(data) == {"nominal_insertable", "impossible", "methods"}
+    assert set(data) == {"nominal_insertable", "impossible", "methods", "kinds"}
     assert set(data["methods"]) == set(config.methods)
     for figures in data["methods"].values():
         assert set(figures) == {"success_within_10", "mean_attempts"}
     m = data["methods"]
     assert m["oracle"]["success_within_10"] >= m["inference"]["success_within_10"]
     assert m["inference"]["success_within_10"] >= m["nominal"]["success_within_10"]
-    two = run_study(StudyConfig(samples=12, seed=3, particles=300, workers=2))
+    two = run_study(StudyConfig(samples=12, seed=3, particles=300, workers=2, kind_samples=2))
     assert all(np.array_equal(result.attempts[k], two.attempts[k]) for k in config.methods)
+    assert two.to_json()["kinds"] == data["kinds"]
 
 
 def test_contact_bearings_save_attempts() -> None:
     """On the same workpieces, each level of evidence inserts in fewer attempts."""
     methods = ("inference", "inference_blocked", "inference_contact")
-    result = run_study(StudyConfig(samples=40, seed=2, particles=300, workers=2, methods=methods))
+    result = run_study(
+        StudyConfig(samples=40, seed=2, particles=300, workers=2, methods=methods, kinds=("bent",))
+    )
     attempts = {m: result.attempts[m] for m in methods}
     both = (attempts["inference_contact"] > 0) & (attempts["inference_blocked"] > 0)
     assert attempts["inference_contact"][both].sum() < attempts["inference_blocked"][both].sum()
@@ -230,13 +233,24 @@ def test_contact_bearings_save_attempts() -> None:
 def test_a_methods_result_does_not_depend_on_the_other_methods() -> None:
     """Each method draws from its own stream, keyed by the method, not by its position."""
     both = run_study(
-        StudyConfig(samples=10, seed=4, particles=200, workers=1, methods=("random", "inference"))
+        StudyConfig(
+            samples=10,
+            seed=4,
+            particles=200,
+            workers=1,
+            methods=("random", "inference"),
+            kinds=("bent",),
+        )
     )
     alone = run_study(
-        StudyConfig(samples=10, seed=4, particles=200, workers=1, methods=("inference",))
+        StudyConfig(
+            samples=10, seed=4, particles=200, workers=1, methods=("inference",), kinds=("bent",)
+        )
     )
     assert np.array_equal(both.attempts["inference"], alone.attempts["inference"])
-    first = run_study(StudyConfig(samples=10, seed=4, workers=1, methods=("random",)))
+    first = run_study(
+        StudyConfig(samples=10, seed=4, workers=1, methods=("random",), kinds=("bent",))
+    )
     assert np.array_equal(both.attempts["random"], first.attempts["random"])
 
 
@@ -245,6 +259,7 @@ def test_cli_smoke(tmp_path, capsys) -> None:
     code = main(
         [
             *("infer-study", "--samples", "4", "--particles", "200", "--workers", "1"),
+            *("--kind-samples", "1"),
             *("--json", str(out), "--plot", str(plot)),
         ]
     )

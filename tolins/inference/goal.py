@@ -13,6 +13,7 @@ posterior's weights already integrate (:mod:`.posterior`). The search starts CMA
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from dataclasses import dataclass
 
@@ -21,7 +22,12 @@ import numpy as np
 
 from tolins.geometry.specs import CircularSocket
 from tolins.inference.history import History
-from tolins.inference.posterior import Posterior, sample_posterior
+from tolins.inference.posterior import (
+    DefectModel,
+    Posterior,
+    sample_defect_posterior,
+    sample_posterior,
+)
 
 #: Below this best expected success the workpiece is recommended for discarding.
 DISCARD_THRESHOLD = 0.02
@@ -39,23 +45,37 @@ class GoalResult:
         expected_success: ``g_{m+1}`` at ``goal`` (0 when the history is unexplained).
         discard: ``expected_success < threshold`` (or the history is unexplained).
         evaluations: Goals whose ``g`` was evaluated.
+        not_insertable: The defect model's verdict (:func:`next_goal` with ``model``): no
+            goal is expected to insert (best ``g`` below ``not_insertable_below``, e.g. the
+            posterior's mass on a blocked hole); the adaptive loop stops. Always False in
+            the bent-pin model.
+        blocked: Posterior probability of a blocked hole (0 in the bent-pin model).
     """
 
     goal: np.ndarray
     expected_success: float
     discard: bool
     evaluations: int
+    not_insertable: bool = False
+    blocked: float = 0.0
 
 
 def expected_success(spec: CircularSocket, posterior: Posterior, goals: object) -> np.ndarray:
     """``g(s̄*) = Σ_n w_n 1[s̄* ∈ T(ε_n)]`` for goals ``(G, 3)``, vectorised over samples."""
     goals = np.asarray(goals, dtype=float).reshape(-1, 3)
     live = posterior.weights > 0
-    return posterior.weights[live] @ inside_matrix(spec, posterior.offsets[live], goals)
+    if posterior.burrs is None:
+        return posterior.weights[live] @ inside_matrix(spec, posterior.offsets[live], goals)
+    inside = inside_matrix(spec, posterior.offsets[live], goals, posterior.burrs[live])
+    return (1.0 - posterior.blocked) * (posterior.weights[live] @ inside)
 
 
-def inside_matrix(spec: CircularSocket, offsets: np.ndarray, goals: np.ndarray) -> np.ndarray:
+def inside_matrix(
+    spec: CircularSocket, offsets: np.ndarray, goals: np.ndarray, burrs: np.ndarray | None = None
+) -> np.ndarray:
     """``1[goal_g ∈ T(ε_n)]`` ``(N, G)``, one pin at a time; equals ``pins_inside(...).all(-1)``.
+
+    ``burrs`` ``(N, n_pins)``: each sample's own burrs (mm) on top of the spec's.
 
     Pin ``i``'s gap ``R(θ) p_i + (x, y) - h_i`` is ``[p_x, p_y, 1] @ [[cos, sin], [-sin, cos],
     [x - h_x, y - h_y]]`` per goal.
@@ -65,12 +85,15 @@ def inside_matrix(spec: CircularSocket, offsets: np.ndarray, goals: np.ndarray) 
     # Each pin's own squared clearance (burrs); a blocked or too-large pin never fits.
     clearances = spec.pin_clearances
     limits = np.where(clearances >= 0, clearances * clearances, -1.0)
+    if burrs is not None:
+        own = clearances[None, :] - burrs
+        limits = np.where(own >= 0, own * own, -1.0)[:, :, None]
     inside = np.ones((len(offsets), len(goals)), dtype=bool)
     for i, (hx, hy) in enumerate(holes):
         px, py = pins[i, 0] + offsets[:, i, 0:1], pins[i, 1] + offsets[:, i, 1:2]
         dx = px * cos - py * sin + (goals[:, 0] - hx)
         dy = px * sin + py * cos + (goals[:, 1] - hy)
-        inside &= dx * dx + dy * dy <= limits[i]
+        inside &= dx * dx + dy * dy <= (limits[i] if burrs is None else limits[:, i])
     return inside
 
 
@@ -169,10 +192,32 @@ def next_goal(
     *,
     n_samples: int = 1000,
     threshold: float = DISCARD_THRESHOLD,
+    model: DefectModel | None = None,
+    not_insertable_below: float = DISCARD_THRESHOLD,
 ) -> GoalResult:
-    """The goal of the next attempt given ``history``: the nominal goal when it is empty."""
+    """The goal of the next attempt given ``history``: the nominal goal when it is empty.
+
+    ``model``: infer with the defect model (:class:`~.posterior.DefectModel`: bends, pitch
+    error, burrs, a blocked hole) instead of the bent-pin prior ``N(0, sigma²)``; then the
+    result is ``not_insertable`` when its best ``g`` (times ``1 - P(blocked)``) is below
+    ``not_insertable_below``.
+    """
+    if model is not None:
+        return _defect_goal(spec, history, model, rng, n_samples, threshold, not_insertable_below)
     posterior = sample_posterior(spec, history, sigma, n_samples, rng)
     if len(history) == 0:
         score = float(expected_success(spec, posterior, np.zeros(3))[0])
         return GoalResult(np.zeros(3), score, score < threshold, 1)
     return find_goal(spec, posterior, rng, threshold=threshold)
+
+
+def _defect_goal(spec, history, model, rng, n_samples, threshold, not_insertable_below):
+    """:func:`next_goal` with the defect model."""
+    posterior = sample_defect_posterior(spec, history, model, n_samples, rng)
+    if len(history) == 0:
+        score = float(expected_success(spec, posterior, np.zeros(3))[0])
+        found = GoalResult(np.zeros(3), score, score < threshold, 1)
+    else:
+        found = find_goal(spec, posterior, rng, threshold=threshold)
+    verdict = len(history) > 0 and found.expected_success < not_insertable_below
+    return dataclasses.replace(found, not_insertable=verdict, blocked=posterior.blocked)

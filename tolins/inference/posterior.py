@@ -25,6 +25,7 @@ giving up with ``explained=False``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,12 +56,19 @@ class Posterior:
         explained: False when no sample, even from a widened prior, explains the history
             (then ``weights`` are uniform over prior samples).
         widening: Factor applied to ``sigma`` to explain the history (1: none).
+        burrs: See below (defect model only).
+        blocked: See below (defect model only).
     """
 
     offsets: np.ndarray
     weights: np.ndarray
     explained: bool = True
     widening: float = 1.0
+    #: ``(N, n_pins)`` each sample's burrs (mm, shrinking the pin's clearance); None: the
+    #: bent-pin model (no burrs). Set by :func:`sample_defect_posterior`.
+    burrs: np.ndarray | None = None
+    #: Posterior probability that a hole is blocked (no goal inserts); 0 in the bent model.
+    blocked: float = 0.0
 
     @property
     def ess(self) -> float:
@@ -220,3 +228,191 @@ def _log_target(
 ) -> np.ndarray:
     prior = -0.5 * np.sum(offsets**2, axis=(1, 2)) / sigma**2
     return prior + log_likelihood(spec, offsets, history, draws, temper)
+
+
+@dataclass(frozen=True)
+class DefectModel:
+    """The prior of :func:`sample_defect_posterior`: bent pins, pitch error, burrs and a
+    blocked hole together (issue 22's defect kinds).
+
+    A workpiece's latent ``z = (bend (n_pins, 2), δ (2,), u (n_pins,))`` is Gaussian:
+    ``bend ~ N(0, sigma²)``, the pitch error ``δ = (col, row) scale - 1 ~ N(0,
+    pitch_sigma²)``, ``u ~ N(0, burr_sigma²)`` with burr ``|u|``. Pin ``i`` sits at
+    ``h_i (1 + δ) + bend_i`` (the effective offset ``h_i δ + bend_i``) with clearance
+    ``c - |u_i|``. Besides, with prior probability ``blocked_prior`` one hole (uniform) is
+    plugged: its pin never goes in, every attempt fails and it is blocked at every contact.
+
+    Attributes:
+        sigma: Bend std per pin and axis (mm).
+        pitch_sigma: Relative pitch error std per axis (0: none).
+        burr_sigma: Burr std (mm; 0: none).
+        blocked_prior: Prior probability of a blocked hole (0: never).
+    """
+
+    sigma: float
+    pitch_sigma: float = 0.0
+    burr_sigma: float = 0.0
+    blocked_prior: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.sigma > 0:
+            raise ValueError(f"sigma={self.sigma!r}; allowed: > 0")
+        for name in ("pitch_sigma", "burr_sigma"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"{name}={getattr(self, name)!r}; allowed: ≥ 0")
+        if not 0.0 <= self.blocked_prior < 1.0:
+            raise ValueError(f"blocked_prior={self.blocked_prior!r}; allowed: 0 ≤ value < 1")
+
+    def scales(self, n_pins: int) -> np.ndarray:
+        """Prior std of each latent coordinate ``(D,)``, ``D = 3 n_pins + 2`` (0: fixed)."""
+        return np.concatenate(
+            [
+                np.full(2 * n_pins, self.sigma),
+                np.full(2, self.pitch_sigma),
+                np.full(n_pins, self.burr_sigma),
+            ]
+        )
+
+
+def defect_parts(spec: CircularSocket, latent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Effective offsets ``(N, n_pins, 2)`` (bend plus pitch error) and burrs ``(N, n_pins)``
+    of latent samples ``(N, 3 n_pins + 2)`` (:class:`DefectModel`)."""
+    n = spec.n_pins
+    bend = latent[:, : 2 * n].reshape(-1, n, 2)
+    pitch = latent[:, 2 * n : 2 * n + 2]
+    return bend + spec.hole_centers * pitch[:, None, :], np.abs(latent[:, 2 * n + 2 :])
+
+
+def defect_log_likelihood(
+    spec: CircularSocket,
+    latent: np.ndarray,
+    history: History,
+    noise_draws: np.ndarray | None,
+    temper: float = np.inf,
+    plugged: int | None = None,
+) -> np.ndarray:
+    """:func:`log_likelihood` of latent samples of the defect model; ``plugged``: under the
+    hypothesis that this hole is blocked (its pin never in)."""
+    if len(history) == 0:
+        return np.zeros(len(latent))
+    offsets, burrs = defect_parts(spec, latent)
+    poses = history.poses[:, None, :]
+    if noise_draws is not None:
+        poses = poses + noise_draws
+    gaps = pin_gaps(spec, offsets[:, None, None], poses[None])
+    clear = spec.clearance - burrs
+    limits = np.where(clear >= 0, clear * clear, -1.0)
+    if plugged is not None:
+        limits[:, plugged] = -1.0
+    inside = np.sum(gaps * gaps, axis=-1) <= limits[:, None, None, :]
+    if history.blocked is None:
+        fits = inside.all(-1) == history.inserted[None, :, None]
+    else:
+        fits = np.all(inside == ~history.blocked[None, :, None, :], axis=-1)
+    factor = fits.astype(float)
+    if history.bearings is not None:
+        factor *= np.exp(_log_bearing_factor(gaps, history))
+    with np.errstate(divide="ignore"):
+        return np.maximum(np.log(factor.mean(-1)), -temper).sum(-1)
+
+
+def sample_defect_posterior(
+    spec: CircularSocket,
+    history: History,
+    model: DefectModel,
+    n_samples: int,
+    rng: np.random.Generator,
+) -> Posterior:
+    """Weighted samples of the defect model's posterior (:class:`DefectModel`), and the
+    posterior probability of a blocked hole.
+
+    The same resample-move scheme as :func:`sample_posterior` on the latent ``z``. The
+    blocked hypothesis's evidence ``Z_b = 1/n Σ_k E[p(history | z, hole k plugged)]`` and
+    the others' ``Z_0 = E[p(history | z)]`` are importance estimates over the
+    ``OVERSAMPLE × n_samples`` prior draws; when no draw explains the history ``Z_0`` is
+    taken as ``1 / draws`` (its upper bound), so a blocked hole is never over-stated.
+    """
+    if not isinstance(spec, CircularSocket):
+        raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
+    if n_samples < 2:
+        raise ValueError(f"n_samples={n_samples!r}; allowed: ≥ 2")
+    scales = model.scales(spec.n_pins)
+    draws = _noise_draws(history, rng)
+
+    def target(z: np.ndarray, temper: float = np.inf) -> np.ndarray:
+        prior = -0.5 * np.sum((z[:, scales > 0] / scales[scales > 0]) ** 2, axis=1)
+        return prior + defect_log_likelihood(spec, z, history, draws, temper)
+
+    def prior_draws(count: int) -> np.ndarray:
+        return rng.normal(0.0, 1.0, size=(count, len(scales))) * scales
+
+    def finish(z: np.ndarray, blocked: float, explained: bool = True) -> Posterior:
+        offsets, burrs = defect_parts(spec, z)
+        weights = np.full(len(z), 1.0 / len(z))
+        return Posterior(offsets, weights, explained, 1.0, burrs, blocked)
+
+    if len(history) == 0:
+        return finish(prior_draws(n_samples), model.blocked_prior)
+    z = prior_draws(n_samples * OVERSAMPLE)
+    log_w = defect_log_likelihood(spec, z, history, draws)
+    blocked = _blocked_probability(spec, z, log_w, history, draws, model.blocked_prior)
+    if not np.isfinite(log_w).any():
+        z = z[:n_samples]
+        previous = np.zeros(n_samples)
+        for temper in _TEMPERS:
+            current = defect_log_likelihood(spec, z, history, draws, temper)
+            z = _latent_move(z, current - previous, lambda q, t=temper: target(q, t), rng, scales)
+            previous = defect_log_likelihood(spec, z, history, draws, temper)
+        log_w = defect_log_likelihood(spec, z, history, draws)
+        if not np.isfinite(log_w).any():
+            # Nothing but a blocked hole explains the history (or nothing at all).
+            return finish(z, blocked, explained=blocked > 0)
+    z = _latent_move(z, log_w, target, rng, scales, n_out=n_samples)
+    return finish(z, blocked)
+
+
+def _blocked_probability(
+    spec: CircularSocket,
+    z: np.ndarray,
+    log_w: np.ndarray,
+    history: History,
+    draws: np.ndarray | None,
+    prior: float,
+) -> float:
+    """``P(blocked | history)`` from the evidences of :func:`sample_defect_posterior`."""
+    if prior <= 0:
+        return 0.0
+    z_free = max(float(np.mean(np.exp(log_w))), 1.0 / len(z))
+    z_blocked = np.mean(
+        [
+            np.mean(np.exp(defect_log_likelihood(spec, z, history, draws, plugged=k)))
+            for k in range(spec.n_pins)
+        ]
+    )
+    return float(prior * z_blocked / (prior * z_blocked + (1 - prior) * z_free))
+
+
+def _latent_move(
+    z: np.ndarray,
+    log_w: np.ndarray,
+    target: Callable[[np.ndarray], np.ndarray],
+    rng: np.random.Generator,
+    scales: np.ndarray,
+    n_out: int | None = None,
+) -> np.ndarray:
+    """Systematic resampling of ``z`` by ``exp(log_w)`` to ``n_out`` samples, then
+    Metropolis random-walk moves on ``target`` (fixed coordinates stay)."""
+    n = len(z) if n_out is None else n_out
+    weights = np.exp(log_w - np.max(log_w))
+    cumulative = np.cumsum(weights / weights.sum())
+    positions = (rng.random() + np.arange(n)) / n
+    z = z[np.minimum(np.searchsorted(cumulative, positions), len(cumulative) - 1)]
+    log_p = target(z)
+    step = 0.5 * np.maximum(z.std(axis=0), 1e-3 * scales) * (scales > 0)
+    for _ in range(_MOVES):
+        proposal = z + rng.normal(size=z.shape) * step
+        log_q = target(proposal)
+        accept = np.log(rng.random(n)) < log_q - log_p
+        z = np.where(accept[:, None], proposal, z)
+        log_p = np.where(accept, log_q, log_p)
+    return z

@@ -30,8 +30,45 @@ def format_table(result: StudyResult) -> str:
         f"nominal goal, {result.impossible:.1%} nowhere",
         f"{'method':<18} {'within 10':>9} {'of insertable':>13} {'mean attempts':>13}   paper",
     ]
-    for method, within, share, attempts, cite in _rows(result.to_json()):
+    summary = result.to_json()
+    for method, within, share, attempts, cite in _rows(summary):
         lines.append(f"{method:<18} {within:>9.1%} {share:>13.1%} {attempts:>13.3f}   {cite}")
+    if summary.get("kinds"):
+        lines += ["", "per defect kind (method: within 10, mean attempts, not insertable)"]
+        for kind, figures in summary["kinds"].items():
+            lines.append(
+                f"{kind} ({figures['workpieces']} workpieces, {figures['impossible']:.1%} "
+                "nowhere): "
+                + ", ".join(
+                    f"{m} {f['success_within_10']:.0%} {f['mean_attempts']:.2f} "
+                    f"{f['not_insertable']:.0%}"
+                    for m, f in figures["methods"].items()
+                )
+            )
+    return "\n".join(lines)
+
+
+def format_kinds_markdown(summary: dict) -> str:
+    """The per-kind part of the study's JSON (``summary["kinds"]``) as a Markdown table;
+    empty for a result without it (an earlier run's)."""
+    kinds = summary.get("kinds")
+    if not kinds:
+        return ""
+    lines = [
+        "Per defect kind (pitch, burr, blocked: bent workpieces with that defect too, the "
+        "inference with the defect model; not insertable: the inference stopped and said so):",
+        "",
+        "| kind | workpieces | insertable nowhere | method | inserted within 10 attempts "
+        "| mean attempts | reported not insertable |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for kind, figures in kinds.items():
+        for method, f in figures["methods"].items():
+            lines.append(
+                f"| {kind} | {figures['workpieces']} | {figures['impossible']:.1%} | {method} "
+                f"| {f['success_within_10']:.1%} | {f['mean_attempts']:.3f} "
+                f"| {f['not_insertable']:.1%} |"
+            )
     return "\n".join(lines)
 
 
@@ -46,6 +83,9 @@ def format_markdown(summary: dict) -> str:
     ]
     for method, within, share, attempts, cite in _rows(summary):
         lines.append(f"| {method} | {within:.1%} | {share:.1%} | {attempts:.3f} | {cite or '—'} |")
+    kinds = format_kinds_markdown(summary)
+    if kinds:
+        lines += ["", kinds]
     return "\n".join(lines)
 
 

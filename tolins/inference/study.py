@@ -17,6 +17,7 @@ pin offset by ``N(0, SIGMA² I)``. Control and measurement are perfect: attempt 
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Generator
 from concurrent.futures import ProcessPoolExecutor
@@ -24,11 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tolins.geometry.defects import sample_defects
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import gaps_inside, pin_gaps, pins_inside
 from tolins.geometry.validation import check_seed
-from tolins.inference.goal import centre_goals, next_goal
+from tolins.inference.goal import DISCARD_THRESHOLD, centre_goals, next_goal
 from tolins.inference.history import History
+from tolins.inference.posterior import DefectModel
 
 #: The study's socket: 2*1, pins 0.3 mm, holes 0.5 mm, 5 mm apart.
 SOCKET = CircularSocket(2, 1, pin_radius=0.3, hole_radius=0.5, row_pitch=5.0)
@@ -52,6 +55,18 @@ RANDOM_GOALS = np.array(
         key=lambda g: np.abs(g).sum(),
     )
 )
+#: The defect kinds of the per-kind study (:data:`~tolins.geometry.defects.DEFECT_KINDS`
+#: less ``short``: a short pin meets the board later but its tolerance is a full pin's, so
+#: it changes no outcome of the tolerance model). ``bent`` is the main study's workpieces
+#: and methods; every other kind's workpieces are bent (``SIGMA``) *and* have that defect,
+#: and its inference methods use the defect model (:data:`DEFECT_MODEL`).
+STUDY_KINDS = ("bent", "pitch", "burr", "blocked")
+#: The defect scales of the per-kind workpieces (:func:`~tolins.geometry.sample_defects`):
+#: row/col pitch ``1 + N(0, 0.02²)`` (±0.05 mm at the pins), burrs ``|N(0, 0.08²)|`` mm
+#: per pin (clearance 0.2 mm), one blocked hole.
+KIND_SIGMAS = {"pitch": 0.02, "burr": 0.08, "blocked": None}
+#: The prior of the per-kind inference: bends, pitch error, burrs and a blocked hole.
+DEFECT_MODEL = DefectModel(SIGMA, pitch_sigma=0.02, burr_sigma=0.08, blocked_prior=0.1)
 #: Paper's figures: fraction inserted within 10 attempts, mean attempts of those.
 PAPER = {"inference": (0.902, 1.836), "random": (0.782, 2.796)}
 
@@ -73,6 +88,11 @@ class StudyConfig:
             instead of the tolerance model.
         discard_below: The inference methods give up on a workpiece (the paper's discard)
             when the best expected success ``g_{m+1}`` falls below this; 0: never.
+        kinds: Defect kinds reported separately (:data:`STUDY_KINDS`); ``bent`` is the
+            main study, each other kind adds ``kind_samples`` workpieces of its own.
+        kind_samples: Workpieces per kind other than ``bent``.
+        not_insertable_below: The defect model's inference stops and reports a workpiece
+            not insertable when its best expected success falls below this.
     """
 
     samples: int = 500
@@ -83,6 +103,9 @@ class StudyConfig:
     methods: tuple[str, ...] = METHODS
     discard_below: float = 0.0
     physics: bool = False
+    kinds: tuple[str, ...] = STUDY_KINDS
+    kind_samples: int = 12
+    not_insertable_below: float = DISCARD_THRESHOLD
 
     def __post_init__(self) -> None:
         for name, least in (("samples", 1), ("max_attempts", 1), ("particles", 2), ("workers", 1)):
@@ -94,16 +117,29 @@ class StudyConfig:
         unknown = set(self.methods) - set(METHODS)
         if unknown or not self.methods:
             raise ValueError(f"methods={self.methods!r}; allowed: a subset of {METHODS}")
+        if set(self.kinds) - set(STUDY_KINDS):
+            raise ValueError(f"kinds={self.kinds!r}; allowed: a subset of {STUDY_KINDS}")
+        if self.kind_samples < 1:
+            raise ValueError(f"kind_samples={self.kind_samples!r}; allowed: ≥ 1")
+        if not 0.0 <= self.not_insertable_below < 1.0:
+            raise ValueError(
+                f"not_insertable_below={self.not_insertable_below!r}; allowed: 0 ≤ value < 1"
+            )
 
 
 @dataclass(frozen=True)
 class StudyResult:
-    """Per-workpiece outcomes: ``attempts[method][k]`` = attempt that inserted, 0 if none."""
+    """Per-workpiece outcomes: ``attempts[method][k]`` = attempt that inserted, 0 if none.
+
+    ``kinds[kind]`` (each kind but ``bent``): ``{"attempts": {method: (K,)}, "not_insertable":
+    {method: (K,) bool}, "insertable": (K,) bool}`` of that kind's workpieces.
+    """
 
     config: StudyConfig
     nominal_insertable: float
     impossible: float
     attempts: dict[str, np.ndarray]
+    kinds: dict[str, dict] = dataclasses.field(default_factory=dict)
 
     def summary(self, method: str) -> dict[str, float]:
         """``success_within_10`` (of all workpieces) and ``mean_attempts`` of inserted ones."""
@@ -112,13 +148,44 @@ class StudyResult:
         mean = float(done.mean()) if len(done) else 0.0
         return {"success_within_10": float(len(done) / len(a)), "mean_attempts": mean}
 
-    def to_json(self) -> dict:
-        """The issue's schema."""
+    def kind_summary(self, kind: str) -> dict:
+        """Per method on the ``kind`` workpieces: ``success_within_10``, ``mean_attempts``,
+        ``not_insertable`` (share reported not insertable) and the kind's ``workpieces``
+        and ``impossible`` share. ``bent``: the main study (never reported not insertable)."""
+        if kind == "bent":
+            methods = {m: {**self.summary(m), "not_insertable": 0.0} for m in self.config.methods}
+            return {
+                "workpieces": self.config.samples,
+                "impossible": self.impossible,
+                "methods": methods,
+            }
+        runs = self.kinds[kind]
+        methods = {}
+        for m in self.config.methods:
+            a = runs["attempts"][m]
+            done = a[a > 0]
+            methods[m] = {
+                "success_within_10": float(len(done) / len(a)),
+                "mean_attempts": float(done.mean()) if len(done) else 0.0,
+                "not_insertable": float(np.mean(runs["not_insertable"][m])),
+            }
+        insertable = runs["insertable"]
         return {
+            "workpieces": len(insertable),
+            "impossible": float(1 - insertable.mean()),
+            "methods": methods,
+        }
+
+    def to_json(self) -> dict:
+        """The issue's schema; ``kinds``: :meth:`kind_summary` of each kind."""
+        summary = {
             "nominal_insertable": self.nominal_insertable,
             "impossible": self.impossible,
             "methods": {m: self.summary(m) for m in self.config.methods},
         }
+        if self.config.kinds:
+            summary["kinds"] = {k: self.kind_summary(k) for k in self.config.kinds}
+        return summary
 
 
 def draw_workpieces(samples: int, seed: int) -> np.ndarray:
@@ -137,25 +204,64 @@ def run_study(
     offsets = draw_workpieces(config.samples, config.seed)
     chunks = np.array_split(np.arange(config.samples), min(config.workers, config.samples))
     jobs = [(config, chunk, offsets[chunk]) for chunk in chunks]
-    rows = []
+    kinds = [kind for kind in config.kinds if kind != "bent"]
+    pieces = {kind: kind_workpieces(kind, config.kind_samples, config.seed) for kind in kinds}
+    kind_jobs = [
+        (config, kind, part, pieces[kind][part[0] : part[-1] + 1])
+        for kind in kinds
+        for part in np.array_split(np.arange(config.kind_samples), config.workers)
+        if len(part)
+    ]
+    rows, kind_rows = [], {kind: [] for kind in kinds}
     if config.workers == 1:
-        done = map(_chunk, jobs)
+        done, kind_done = map(_chunk, jobs), map(_kind_chunk, kind_jobs)
     else:
         pool = ProcessPoolExecutor(config.workers)
-        done = pool.map(_chunk, jobs)
+        done, kind_done = pool.map(_chunk, jobs), pool.map(_kind_chunk, kind_jobs)
     try:
         for chunk_rows in done:
             for row in chunk_rows:
                 rows.append(row)
                 if on_workpiece:
                     on_workpiece(len(rows) - 1)
+        for (_, kind, _, _), chunk_rows in zip(kind_jobs, kind_done, strict=True):
+            kind_rows[kind] += chunk_rows
     finally:
         if config.workers != 1:
             pool.shutdown()
     inside = pins_inside(SOCKET, offsets, np.zeros(3)).all(-1)
     possible = pins_inside(SOCKET, offsets, centre_goals(SOCKET, offsets)).all(-1)
     attempts = {m: np.array([row[m] for row in rows]) for m in config.methods}
-    return StudyResult(config, float(inside.mean()), float(1 - possible.mean()), attempts)
+    by_kind = {
+        kind: {
+            "attempts": {m: np.array([r[m][0] for r in kind_rows[kind]]) for m in config.methods},
+            "not_insertable": {
+                m: np.array([r[m][1] for r in kind_rows[kind]]) for m in config.methods
+            },
+            "insertable": np.array([insertable(spec) for spec in pieces[kind]]),
+        }
+        for kind in kinds
+    }
+    return StudyResult(config, float(inside.mean()), float(1 - possible.mean()), attempts, by_kind)
+
+
+def kind_workpieces(kind: str, samples: int, seed: int) -> list[CircularSocket]:
+    """The per-kind study's workpieces: bent pins (``SIGMA``) and a ``kind`` defect
+    (:data:`KIND_SIGMAS`), from their own stream ``[seed, 1, kind]``."""
+    rng = np.random.default_rng([seed, 1, STUDY_KINDS.index(kind)])
+    return [
+        sample_defects(sample_defects(SOCKET, SIGMA, rng), KIND_SIGMAS[kind], rng, kind=kind)
+        for _ in range(samples)
+    ]
+
+
+def insertable(spec: CircularSocket) -> bool:
+    """Whether some goal inserts workpiece ``spec`` (checked at its centre goal, the deepest
+    pose of a 2-pin socket; a blocked hole never)."""
+    if spec.blocked_holes:
+        return False
+    goal = centre_goals(spec, (spec.pin_centers - spec.hole_centers)[None])[0]
+    return bool(pins_inside(spec, spec.offsets, goal).all())
 
 
 #: An attempt at a goal: which pins are in their holes, and each blocked pin's bearing
@@ -182,6 +288,70 @@ def _chunk(job: tuple[StudyConfig, np.ndarray, np.ndarray]) -> list[dict[str, in
     return [{m: results[(k, m)] for m in config.methods} for k in range(len(indices))]
 
 
+def _kind_chunk(job: tuple[StudyConfig, str, np.ndarray, list[CircularSocket]]) -> list[dict]:
+    """Every method's ``(attempt, not_insertable)`` on each workpiece of a kind's chunk
+    (``job``: config, kind, indices, workpieces)."""
+    config, kind, indices, specs = job
+    runs = {}
+    for (k, spec), index in zip(enumerate(specs), indices, strict=True):
+        for m in config.methods:
+            rng = np.random.default_rng(
+                [config.seed, 1, STUDY_KINDS.index(kind), int(index), METHODS.index(m)]
+            )
+            eps = spec.pin_centers - spec.hole_centers
+            runs[(k, m)] = _defect_attempt_goals(m, eps, config, rng)
+    if config.physics:
+        results = _lockstep_physics(runs, None, specs)
+    else:
+        results = {
+            key: _drive(run, geometry_outcome(specs[key[0]].offsets, specs[key[0]]))
+            for key, run in runs.items()
+        }
+    return [{m: results[(k, m)] for m in config.methods} for k in range(len(specs))]
+
+
+def _defect_attempt_goals(
+    method: str, eps: np.ndarray, config: StudyConfig, rng: np.random.Generator
+) -> Generator[np.ndarray, tuple[np.ndarray, np.ndarray], tuple[int, bool]]:
+    """:func:`_attempt_goals` with the defect model (:data:`DEFECT_MODEL`); returns the
+    attempt that inserted (0: none) and whether the inference reported it not insertable.
+    ``eps``: the workpiece's effective pin offsets (bends and pitch error) for ``oracle``."""
+    goals = _fixed_goals(method, eps, config.max_attempts, rng)
+    if goals is not None:
+        for attempt, goal in enumerate(goals, start=1):
+            inside, _ = yield goal
+            if inside.all():
+                return attempt, False
+        return 0, False
+    with_blocked, with_bearings = EVIDENCE[method]
+    history = History.empty()
+    for attempt in range(1, config.max_attempts + 1):
+        found = next_goal(
+            SOCKET,
+            history,
+            SIGMA,
+            rng,
+            n_samples=config.particles,
+            threshold=config.discard_below,
+            model=DEFECT_MODEL,
+            not_insertable_below=config.not_insertable_below,
+        )
+        if found.not_insertable:
+            return 0, True
+        if found.discard:
+            return 0, False
+        inside, bearings = yield found.goal
+        if inside.all():
+            return attempt, False
+        history = history.append(
+            found.goal,
+            False,
+            ~inside if with_blocked else None,
+            bearings if with_bearings else None,
+        )
+    return 0, False
+
+
 def _drive(run: Attempts, outcome: Outcome) -> int:
     """Run one method's attempts, each answered by ``outcome``."""
     try:
@@ -192,13 +362,17 @@ def _drive(run: Attempts, outcome: Outcome) -> int:
         return stop.value
 
 
-def _lockstep_physics(runs: dict[tuple[int, str], Attempts], offsets: np.ndarray) -> dict:
-    """Advance every run by one attempt per round, all of a round's pushes in one batch."""
-    import dataclasses
-
+def _lockstep_physics(
+    runs: dict[tuple[int, str], Attempts],
+    offsets: np.ndarray | None,
+    specs: list[CircularSocket] | None = None,
+) -> dict:
+    """Advance every run by one attempt per round, all of a round's pushes in one batch
+    (workpiece ``k``: ``SOCKET`` with ``offsets[k]``, or ``specs[k]``)."""
     from tolins.inference.physics import AttemptBatch
 
-    specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
+    if specs is None:
+        specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
     batch = AttemptBatch(SOCKET, slots=min(64, len(runs)), num_threads=1)
     results, pending = {}, {}
     for key, run in runs.items():
@@ -226,12 +400,13 @@ def _method_rng(seed: int, index: int, method: str) -> np.random.Generator:
     return np.random.default_rng([seed, index, METHODS.index(method) + 1])
 
 
-def geometry_outcome(eps: np.ndarray) -> Outcome:
-    """Which pins are in their holes at a goal, and the bearings, by the tolerance model."""
+def geometry_outcome(eps: np.ndarray, spec: CircularSocket = SOCKET) -> Outcome:
+    """Which pins are in their holes at a goal, and the bearings, by the tolerance model
+    (``spec``: the workpiece's other defects, pitch error, burrs, blocked holes)."""
 
     def attempt(goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        gaps = pin_gaps(SOCKET, eps, goal)
-        inside = gaps_inside(SOCKET, gaps)
+        gaps = pin_gaps(spec, eps, goal)
+        inside = gaps_inside(spec, gaps)
         return inside, np.where(inside, np.nan, np.arctan2(gaps[:, 1], gaps[:, 0]))
 
     return attempt

@@ -150,6 +150,7 @@ def _infer_study(args: argparse.Namespace) -> int:
             methods=tuple(args.methods.split(",")) if args.methods else StudyConfig.methods,
             discard_below=args.discard_below,
             physics=args.physics,
+            kind_samples=args.kind_samples,
         )
     except ValueError as error:
         print(f"tolins infer-study: {error}", file=sys.stderr)
@@ -297,6 +298,12 @@ def _add_infer_study(commands: argparse._SubParsersAction) -> None:
         "--particles", type=positive_int, default=1000, help="posterior samples per query"
     )
     study.add_argument("--workers", type=positive_int, default=2, help="processes")
+    study.add_argument(
+        "--kind-samples",
+        type=positive_int,
+        default=12,
+        help="workpieces per defect kind besides bent (pitch, burr, blocked)",
+    )
     study.add_argument(
         "--methods",
         action=cli_checks.JoinedList,

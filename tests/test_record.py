@@ -22,6 +22,7 @@ from rrd_tables import read_tables
 
 import tolins
 from tolins.cli import main
+from tolins.mjcf.model import PIN_LENGTH
 from tolins.policies.experts import SafeExpert
 from tolins.record import RerunRecorder, check_rrd, record_episodes, replay
 from tolins.record.geometry import board_geometry, pin_geometry, prism_mesh
@@ -175,6 +176,53 @@ def test_bent_pins_are_logged_per_episode(tmp_path: Path) -> None:
         np.testing.assert_allclose(pins[:, :2], spec.pin_centers, atol=1e-6)
         centers.append(pins)
     assert not np.allclose(centers[0], centers[1])
+
+
+def test_defects_are_drawn_with_their_geometry(tmp_path: Path) -> None:
+    """A burred pin has its own radius and colour, a short pin its length, a pitch error
+    the scaled places, a blocked hole a plug: as the MJCF model builds them."""
+    socket = tolins.CircularSocket(
+        2,
+        2,
+        pin_burrs=(0.05, 0.0, 0.0, 0.0),
+        pin_shortenings=(0.0, 0.3, 0.0, 0.0),
+        blocked_holes=(3,),
+        pin_pitch_scale=(1.004, 0.998),
+    )
+    path = tmp_path / "defects.rrd"
+    env = gym.make("tolins/Insert-v1", socket=socket, backend="kinematic", horizon=3)
+    record_episodes(env, SafeExpert(), 1, path, seed=0)
+    drawn = gym.make("tolins/Circle2x2-v1", backend="kinematic", horizon=2, defects=("burr", 0.05))
+    record_episodes(drawn, SafeExpert(), 2, tmp_path / "burrs.rrd", seed=0)
+    tables = read_tables(path)
+    pins = tables["/world/episode_000/workpiece/pins#static"]
+    model = mujoco.MjModel.from_xml_string(tolins.make_mjcf(socket))
+    ids = [model.geom(f"pin{i}").id for i in range(4)]
+    np.testing.assert_allclose(pins["Cylinders3D:centers"][0], model.geom_pos[ids], atol=1e-6)
+    np.testing.assert_allclose(pins["Cylinders3D:radii"][0], [0.35, 0.3, 0.3, 0.3], atol=1e-6)
+    np.testing.assert_allclose(pins["Cylinders3D:radii"][0], model.geom_size[ids, 0], atol=1e-6)
+    np.testing.assert_allclose(pins["Cylinders3D:lengths"][0], 2 * model.geom_size[ids, 1])
+    assert pins["Cylinders3D:lengths"][0][1] == pytest.approx(PIN_LENGTH - 0.3)
+    np.testing.assert_allclose(
+        np.array(pins["Cylinders3D:centers"][0])[:, :2], socket.pin_centers, atol=1e-6
+    )
+    colors = pins["Cylinders3D:colors"][0]
+    assert colors[0] != colors[2] and colors[1] not in (colors[0], colors[2])
+    assert colors[2] == colors[3]
+    plugs = tables["/world/episode_000/plugs#static"]
+    plug = model.geom("plug3").id
+    np.testing.assert_allclose(plugs["Boxes3D:centers"][0], model.geom_pos[[plug]], atol=1e-6)
+    np.testing.assert_allclose(plugs["Boxes3D:half_sizes"][0], model.geom_size[[plug]], atol=1e-6)
+    burrs = read_tables(tmp_path / "burrs.rrd")
+    radii = []
+    for k in range(2):
+        meta = burrs[f"/metadata/episode_{k:03d}#static"]["spec"][0][0]
+        spec = spec_from_dict(json.loads(meta))
+        logged = burrs[f"/world/episode_{k:03d}/workpiece/pins#static"]["Cylinders3D:radii"][0]
+        np.testing.assert_allclose(logged, spec.pin_radii, atol=1e-6)
+        radii.append(logged)
+        assert f"/world/episode_{k:03d}/plugs#static" not in burrs
+    assert spec.pin_burrs is not None and radii[0] != radii[1]
 
 
 def test_rerun_rrd_verify_accepts_the_file(recording: tuple) -> None:

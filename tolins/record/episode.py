@@ -16,6 +16,7 @@ from tolins.record.layout import (
     SIM_TIME,
     STEP,
     force_path,
+    plugs_path,
     series_path,
     workpiece_path,
 )
@@ -107,7 +108,7 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
     if not episode.steps:
         raise ValueError(f"episode {k} has no rows; allowed: a buffer started by start()")
     spec = episode.metadata["spec"]
-    log_workpiece(stream, workpiece_path(k), spec)
+    log_workpiece(stream, workpiece_path(k), spec, plugs=plugs_path(k))
     meta = {key: v for key, v in episode.metadata.items() if key != "spec" and v is not None}
     stream.log(
         series_path("metadata", k),

@@ -50,15 +50,20 @@ class BoardGeometry:
 
 @dataclass(frozen=True)
 class PinGeometry:
-    """The pins in the workpiece frame (tips at z = 0): exactly one field is set.
+    """The pins in the workpiece frame (a full-length pin's tip at z = 0): exactly one of
+    ``cylinders``, ``box``, ``mesh`` is set.
 
-    ``cylinders`` is ``(centers (n, 3), radius)``; ``box`` a single square peg;
-    ``mesh`` a polygon peg prism.
+    ``cylinders`` is ``(centers (n, 3), radii (n,), lengths (n,))`` as the MJCF model
+    places them: pitch error and bends in the centres, a burr in its pin's radius, a short
+    pin lacking its tip (shorter, centred higher); ``box`` a single square peg; ``mesh`` a
+    polygon peg prism. ``burred`` and ``short`` flag each pin ``(n,)`` (circles only).
     """
 
-    cylinders: tuple[np.ndarray, float] | None = None
+    cylinders: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
     box: BoxSet | None = None
     mesh: TriangleMesh | None = None
+    burred: np.ndarray | None = None
+    short: np.ndarray | None = None
 
 
 def prism_mesh(outline: np.ndarray, z_bottom: float, z_top: float) -> TriangleMesh:
@@ -122,11 +127,16 @@ def board_geometry(spec: SocketSpec) -> BoardGeometry:
 
 
 def pin_geometry(spec: SocketSpec) -> PinGeometry:
-    """The pins of ``spec`` (bent pins included) in the workpiece frame."""
+    """The pins of ``spec`` (its defects included) in the workpiece frame."""
     half = PIN_LENGTH / 2
     if isinstance(spec, CircularSocket):
-        centers = np.column_stack([spec.pin_centers, np.full(spec.n_pins, half)])
-        return PinGeometry(cylinders=(centers, spec.pin_radius))
+        levels = spec.shortenings
+        centers = np.column_stack([spec.pin_centers, half + levels / 2])
+        return PinGeometry(
+            cylinders=(centers, spec.pin_radii, PIN_LENGTH - levels),
+            burred=spec.burrs > 0,
+            short=levels > 0,
+        )
     if spec.sides == 4:
         side_half = inradius(4, spec.pin_circumradius)
         return PinGeometry(
@@ -134,6 +144,19 @@ def pin_geometry(spec: SocketSpec) -> PinGeometry:
         )
     outline = polygon_vertices(spec.sides, spec.pin_circumradius)
     return PinGeometry(mesh=prism_mesh(outline, 0.0, PIN_LENGTH))
+
+
+def plug_boxes(spec: SocketSpec) -> BoxSet | None:
+    """The plugs of ``spec``'s blocked holes (``None``: none), in the world frame: the MJCF
+    model's ``plug{h}`` boxes, a square of half-width ``hole_radius`` through the board."""
+    if not isinstance(spec, CircularSocket) or not spec.blocked_holes:
+        return None
+    holes = spec.hole_centers[list(spec.blocked_holes)]
+    n = len(holes)
+    return BoxSet(
+        np.column_stack([holes, np.full(n, -BOARD_THICKNESS / 2)]),
+        np.tile([spec.hole_radius, spec.hole_radius, BOARD_THICKNESS / 2], (n, 1)),
+    )
 
 
 def carrier_box(spec: SocketSpec) -> BoxSet:

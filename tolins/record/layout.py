@@ -51,6 +51,11 @@ def workpiece_path(index: int) -> str:
     return f"{WORLD}/{episode_name(index)}/workpiece"
 
 
+def plugs_path(index: int) -> str:
+    """The plugs of the blocked holes of episode ``index``'s workpiece (world frame)."""
+    return f"{WORLD}/{episode_name(index)}/plugs"
+
+
 def force_path(index: int) -> str:
     return f"{WORLD}/{episode_name(index)}/force"
 

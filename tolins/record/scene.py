@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+import numpy as np
 import rerun as rr
 
 from tolins.geometry.specs import SocketSpec
@@ -13,12 +14,17 @@ from tolins.record.geometry import (
     carrier_box,
     flat_shaded,
     pin_geometry,
+    plug_boxes,
 )
 from tolins.record.layout import BOARD, WORLD
 
 BOARD_COLOR = (64, 115, 77)
 HOLE_COLOR = (20, 30, 25)
 PIN_COLOR = (217, 179, 77)
+#: A burred (oversized) pin, a short pin, and the plug of a blocked hole.
+BURR_COLOR = (220, 60, 50)
+SHORT_COLOR = (70, 130, 220)
+PLUG_COLOR = (200, 60, 160)
 CARRIER_COLOR = (153, 153, 166, 110)
 
 
@@ -59,12 +65,15 @@ def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsCompon
     """The pins and the carrier of ``spec`` (built once per spec: episodes share them)."""
     pins = pin_geometry(spec)
     if pins.cylinders is not None:
-        centers, radius = pins.cylinders
+        centers, radii, lengths = pins.cylinders
+        colors = np.tile(PIN_COLOR, (len(centers), 1))
+        colors[pins.short] = SHORT_COLOR
+        colors[pins.burred] = BURR_COLOR
         archetype = rr.Cylinders3D(
             centers=centers,
-            lengths=[2 * centers[0, 2]] * len(centers),
-            radii=[radius] * len(centers),
-            colors=PIN_COLOR,
+            lengths=lengths,
+            radii=radii,
+            colors=colors.astype(np.uint8),
             fill_mode="solid",
         )
     elif pins.box is not None:
@@ -86,8 +95,23 @@ def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsCompon
     return archetype, carrier_archetype
 
 
-def log_workpiece(stream: rr.RecordingStream, path: str, spec: SocketSpec) -> None:
-    """``spec``'s pins and carrier under the workpiece entity ``path``, static."""
+def log_workpiece(
+    stream: rr.RecordingStream, path: str, spec: SocketSpec, plugs: str | None = None
+) -> None:
+    """``spec``'s pins and carrier under the workpiece entity ``path``, static; with
+    ``plugs`` (a world-frame entity), the plugs of its blocked holes there."""
     pins, carrier = workpiece_archetypes(spec)
     stream.log(f"{path}/pins", pins, static=True)
     stream.log(f"{path}/carrier", carrier, static=True)
+    boxes = plug_boxes(spec)
+    if plugs is not None and boxes is not None:
+        stream.log(
+            plugs,
+            rr.Boxes3D(
+                centers=boxes.centers,
+                half_sizes=boxes.half_sizes,
+                colors=PLUG_COLOR,
+                fill_mode="solid",
+            ),
+            static=True,
+        )

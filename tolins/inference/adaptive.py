@@ -40,6 +40,7 @@ from tolins.geometry.specs import CircularSocket
 from tolins.inference.goal import next_goal
 from tolins.inference.history import History
 from tolins.inference.physics import touch_bearings
+from tolins.inference.posterior import DefectModel
 from tolins.paper import A_MAX
 
 Policy = Callable[[np.ndarray], np.ndarray]
@@ -63,6 +64,10 @@ class InferenceGuidedPolicy:
         touch_force: Touch-sensor reading (N) above which a pin counts as blocked.
         max_replans: Re-plans per episode at most.
         n_samples: Posterior samples.
+        model: Infer with the defect model (:class:`~tolins.inference.posterior.DefectModel`:
+            bends, pitch error, burrs, a blocked hole) instead of the bent-pin prior; then
+            the wrapper stops re-planning once a goal search says the workpiece is not
+            insertable (:attr:`not_insertable`).
     """
 
     def __init__(
@@ -79,6 +84,7 @@ class InferenceGuidedPolicy:
         touch_force: float = 0.05,
         max_replans: int = 8,
         n_samples: int = 1000,
+        model: DefectModel | None = None,
     ) -> None:
         self.policy = policy
         self.env = env.unwrapped
@@ -94,6 +100,7 @@ class InferenceGuidedPolicy:
         self.touch_force = float(touch_force)
         self.max_replans = int(max_replans)
         self.n_samples = int(n_samples)
+        self.model = model
         self.base_goal = self.env.goal
         noise = np.asarray(self.env.measurement_noise, dtype=float)[:3]
         self.noise = noise if np.any(noise > 0) else None
@@ -112,6 +119,11 @@ class InferenceGuidedPolicy:
     def replans(self) -> int:
         return len(self.goals)
 
+    @property
+    def not_insertable(self) -> bool:
+        """Whether the inference (with ``model``) said no goal inserts this workpiece."""
+        return any(result.not_insertable for result in self.results)
+
     def blocked(self, observation: np.ndarray) -> bool:
         """Whether ``observation`` shows the pins pushed onto the board top."""
         return bool(
@@ -125,7 +137,7 @@ class InferenceGuidedPolicy:
             return self._lift()
         if not self.blocked(observation):
             return self.policy(observation)
-        if self.inference and self.replans < self.max_replans:
+        if self.inference and self.replans < self.max_replans and not self.not_insertable:
             self._replan(observation[:3] + self.env.goal - self.base_goal)
         self._lifting = self.lift_steps - 1
         return self._lift() if self.lift_steps else self.policy(observation)
@@ -143,8 +155,16 @@ class InferenceGuidedPolicy:
                 pins[int(np.argmax(forces))] = True
             bearings = touch_bearings(self.env.backend, pins)
         self.history = self.history.append(pose, False, pins, bearings)
-        result = next_goal(self.spec, self.history, self.sigma, self.rng, n_samples=self.n_samples)
+        result = next_goal(
+            self.spec,
+            self.history,
+            self.sigma,
+            self.rng,
+            n_samples=self.n_samples,
+            model=self.model,
+        )
         self.results.append(result)
-        goal = self.env.goal if result.discard else self.base_goal + result.goal
+        stay = result.discard or result.not_insertable
+        goal = self.env.goal if stay else self.base_goal + result.goal
         self.goals.append(goal)
         self.env.goal = goal

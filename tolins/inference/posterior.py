@@ -290,9 +290,11 @@ def defect_log_likelihood(
     noise_draws: np.ndarray | None,
     temper: float = np.inf,
     plugged: int | None = None,
+    bearings: bool = True,
 ) -> np.ndarray:
     """:func:`log_likelihood` of latent samples of the defect model; ``plugged``: under the
-    hypothesis that this hole is blocked (its pin never in)."""
+    hypothesis that this hole is blocked (its pin never in); ``bearings=False``: without
+    the touch bearings' factors (outcomes and blocked pins only)."""
     if len(history) == 0:
         return np.zeros(len(latent))
     offsets, burrs = defect_parts(spec, latent)
@@ -310,7 +312,7 @@ def defect_log_likelihood(
     else:
         fits = np.all(inside == ~history.blocked[None, :, None, :], axis=-1)
     factor = fits.astype(float)
-    if history.bearings is not None:
+    if bearings and history.bearings is not None:
         factor *= np.exp(_log_bearing_factor(gaps, history))
     with np.errstate(divide="ignore"):
         return np.maximum(np.log(factor.mean(-1)), -temper).sum(-1)
@@ -328,9 +330,10 @@ def sample_defect_posterior(
 
     The same resample-move scheme as :func:`sample_posterior` on the latent ``z``. The
     blocked hypothesis's evidence ``Z_b = 1/n Σ_k E[p(history | z, hole k plugged)]`` and
-    the others' ``Z_0 = E[p(history | z)]`` are importance estimates over the
-    ``OVERSAMPLE × n_samples`` prior draws; when no draw explains the history ``Z_0`` is
-    taken as ``1 / draws`` (its upper bound), so a blocked hole is never over-stated.
+    the others' ``Z_0 = E[p(history | z)]`` are Monte Carlo estimates over the
+    ``OVERSAMPLE × n_samples`` prior draws of the outcomes and blocked pins (the bearings
+    left out: both are then shares of the draws); when no draw explains the history ``Z_0``
+    is taken as ``1 / draws`` (its upper bound), so a blocked hole is never over-stated.
     """
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r}; allowed: a CircularSocket")
@@ -355,7 +358,7 @@ def sample_defect_posterior(
         return finish(prior_draws(n_samples), model.blocked_prior)
     z = prior_draws(n_samples * OVERSAMPLE)
     log_w = defect_log_likelihood(spec, z, history, draws)
-    blocked = _blocked_probability(spec, z, log_w, history, draws, model.blocked_prior)
+    blocked = _blocked_probability(spec, z, history, draws, model.blocked_prior)
     if not np.isfinite(log_w).any():
         z = z[:n_samples]
         previous = np.zeros(n_samples)
@@ -374,7 +377,6 @@ def sample_defect_posterior(
 def _blocked_probability(
     spec: CircularSocket,
     z: np.ndarray,
-    log_w: np.ndarray,
     history: History,
     draws: np.ndarray | None,
     prior: float,
@@ -382,10 +384,11 @@ def _blocked_probability(
     """``P(blocked | history)`` from the evidences of :func:`sample_defect_posterior`."""
     if prior <= 0:
         return 0.0
+    log_w = defect_log_likelihood(spec, z, history, draws, bearings=False)
     z_free = max(float(np.mean(np.exp(log_w))), 1.0 / len(z))
     z_blocked = np.mean(
         [
-            np.mean(np.exp(defect_log_likelihood(spec, z, history, draws, plugged=k)))
+            np.mean(np.exp(defect_log_likelihood(spec, z, history, draws, k, bearings=False)))
             for k in range(spec.n_pins)
         ]
     )

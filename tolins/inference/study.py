@@ -256,12 +256,28 @@ def kind_workpieces(kind: str, samples: int, seed: int) -> list[CircularSocket]:
 
 
 def insertable(spec: CircularSocket) -> bool:
-    """Whether some goal inserts workpiece ``spec`` (checked at its centre goal, the deepest
-    pose of a 2-pin socket; a blocked hole never)."""
+    """Whether some goal inserts workpiece ``spec``: :func:`insertion_margin` ``≥ 0``."""
+    return insertion_margin(spec) >= 0
+
+
+def insertion_margin(spec: CircularSocket) -> float:
+    """The largest ``min_i(c_i - |gap_i|)`` over poses (mm; ``-inf`` for a blocked hole):
+    Nelder-Mead from the centre goal, which is the deepest pose when the clearances are
+    equal. ``≥ 0``: some goal inserts the workpiece."""
+    from scipy.optimize import minimize
+
     if spec.blocked_holes:
-        return False
-    goal = centre_goals(spec, (spec.pin_centers - spec.hole_centers)[None])[0]
-    return bool(pins_inside(spec, spec.offsets, goal).all())
+        return -np.inf
+    start = centre_goals(spec, (spec.pin_centers - spec.hole_centers)[None])[0]
+    scale = np.array([1.0, 1.0, max(float(np.max(np.hypot(*spec.hole_centers.T))), 1.0)])
+
+    def excess(x: np.ndarray) -> float:
+        gaps = pin_gaps(spec, spec.offsets, x / scale)
+        return float(np.max(np.hypot(gaps[:, 0], gaps[:, 1]) - spec.pin_clearances))
+
+    options = {"xatol": 1e-9, "fatol": 1e-12}
+    best = minimize(excess, start * scale, method="Nelder-Mead", options=options)
+    return -min(float(best.fun), excess(start * scale))
 
 
 #: An attempt at a goal: which pins are in their holes, and each blocked pin's bearing

@@ -1,0 +1,151 @@
+"""Inference with the defect model: pitch error, burrs and blocked holes (issue 22)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from tolins.geometry.tolerance import pins_inside
+from tolins.inference.goal import next_goal
+from tolins.inference.history import History
+from tolins.inference.posterior import DefectModel, sample_defect_posterior, sample_posterior
+from tolins.inference.report import format_kinds_markdown, format_markdown
+from tolins.inference.study import (
+    DEFECT_MODEL,
+    SIGMA,
+    SOCKET,
+    StudyConfig,
+    geometry_outcome,
+    insertable,
+    insertion_margin,
+    kind_workpieces,
+    run_study,
+)
+
+#: Pin 1 bent 0.15 mm in x and the row pitch 6 % long (the pins ±0.15 mm in y): blocked at
+#: the nominal goal, inserted 0.075 mm to -x.
+PITCHED = dataclasses.replace(
+    SOCKET, pin_offsets=((0.0, 0.0), (0.15, 0.0)), pin_pitch_scale=(1.0, 1.06)
+)
+#: Pin 0 bent 0.1 mm in x with a 0.15 mm burr (its clearance 0.05 mm): blocked at the
+#: nominal goal, inserted about 0.1 mm to -x.
+BURRED = dataclasses.replace(SOCKET, pin_offsets=((0.1, 0.0), (0.0, 0.0)), pin_burrs=(0.15, 0.0))
+
+
+def infer(spec, *, contact=True, particles=400, attempts=10, seed=0, model=DEFECT_MODEL):
+    """The defect model's inference on workpiece ``spec`` with geometry outcomes: the
+    attempt that inserted (0: none), whether it said not insertable, the last result and
+    the history."""
+    outcome = geometry_outcome(spec.offsets, spec)
+    rng = np.random.default_rng(seed)
+    history = History.empty()
+    found = None
+    for attempt in range(1, attempts + 1):
+        found = next_goal(SOCKET, history, SIGMA, rng, n_samples=particles, model=model)
+        if found.not_insertable:
+            return 0, True, found, history
+        inside, bearings = outcome(found.goal)
+        if inside.all():
+            return attempt, False, found, history
+        history = history.append(
+            found.goal, False, ~inside if contact else None, bearings if contact else None
+        )
+    return 0, False, found, history
+
+
+def test_pitch_error_is_explained_and_the_next_goal_inserts() -> None:
+    assert insertable(PITCHED) and not pins_inside(PITCHED, PITCHED.offsets, np.zeros(3)).all()
+    attempt, verdict, _, history = infer(PITCHED)
+    assert 1 < attempt <= 4 and not verdict
+    # The posterior's pins (bends plus pitch error) sit where the true pins are.
+    posterior = sample_defect_posterior(
+        SOCKET, history, DEFECT_MODEL, 400, np.random.default_rng(1)
+    )
+    truth = PITCHED.pin_centers - SOCKET.hole_centers
+    mean = np.einsum("n,nij->ij", posterior.weights, posterior.offsets)
+    assert np.abs(mean - truth).max() < 0.08
+    assert posterior.blocked < 0.95
+
+
+def test_burr_is_explained_and_the_next_goal_inserts() -> None:
+    assert insertable(BURRED) and not pins_inside(BURRED, BURRED.offsets, np.zeros(3)).all()
+    attempt, verdict, _, history = infer(BURRED)
+    assert attempt > 1 and not verdict
+    posterior = sample_defect_posterior(
+        SOCKET, history, DEFECT_MODEL, 400, np.random.default_rng(1)
+    )
+    assert posterior.burrs.shape == (400, 2)
+    assert posterior.weights @ posterior.burrs[:, 0] > posterior.weights @ posterior.burrs[:, 1]
+
+
+def test_blocked_hole_is_reported_not_insertable_within_the_budget() -> None:
+    for spec in kind_workpieces("blocked", 3, seed=5):
+        attempt, verdict, found, history = infer(spec)
+        assert attempt == 0 and verdict and found.not_insertable
+        assert len(history) < 10 and found.blocked > DEFECT_MODEL.blocked_prior
+
+
+def test_nominal_and_insertable_workpieces_are_never_reported_not_insertable() -> None:
+    attempt, verdict, found, _ = infer(SOCKET)
+    assert (attempt, verdict, found.not_insertable) == (1, False, False)
+    for kind in ("pitch", "burr"):
+        for seed, spec in enumerate(kind_workpieces(kind, 4, seed=7)):
+            attempt, verdict, _, _ = infer(spec, seed=seed)
+            # "Not insertable" means an expected success below 2 %: a feasible region as
+            # narrow as 0.01 mm may be given up, a wider one is not.
+            if insertion_margin(spec) > 0.03:
+                assert attempt > 0 and not verdict
+            if not insertable(spec):
+                assert attempt == 0
+
+
+def test_bent_model_is_unchanged_by_the_defect_model() -> None:
+    """Without ``model`` next_goal is the bent-pin inference; its posterior has no burrs."""
+    history = History.empty().append([0.0, 0.0, 0.0], False, [True, False], [0.0, np.nan])
+    bent = sample_posterior(SOCKET, history, SIGMA, 50, np.random.default_rng(0))
+    assert bent.burrs is None and bent.blocked == 0.0
+    a = next_goal(SOCKET, history, SIGMA, np.random.default_rng(0), n_samples=100)
+    b = next_goal(SOCKET, history, SIGMA, np.random.default_rng(0), n_samples=100)
+    np.testing.assert_array_equal(a.goal, b.goal)
+    assert not a.not_insertable and a.blocked == 0.0
+    # A model with neither pitch error, burrs nor blocked holes is a bent-pin model.
+    only_bends = DefectModel(SIGMA)
+    found = next_goal(SOCKET, history, SIGMA, np.random.default_rng(0), model=only_bends)
+    assert found.blocked == 0.0 and found.expected_success > 0.5
+
+
+def test_study_reports_each_kind() -> None:
+    config = StudyConfig(
+        samples=3,
+        seed=1,
+        particles=200,
+        workers=1,
+        kind_samples=3,
+        methods=("inference_contact", "nominal", "oracle"),
+    )
+    result = run_study(config)
+    data = result.to_json()
+    assert list(data["kinds"]) == ["bent", "pitch", "burr", "blocked"]
+    assert data["kinds"]["bent"]["methods"]["nominal"] == {
+        **data["methods"]["nominal"],
+        "not_insertable": 0.0,
+    }
+    blocked = data["kinds"]["blocked"]
+    assert blocked["impossible"] == 1.0 and blocked["workpieces"] == 3
+    assert blocked["methods"]["inference_contact"]["not_insertable"] == 1.0
+    assert all(m["success_within_10"] == 0.0 for m in blocked["methods"].values())
+    for kind in ("pitch", "burr"):
+        figures = data["kinds"][kind]["methods"]
+        assert (
+            figures["inference_contact"]["success_within_10"]
+            >= (figures["nominal"]["success_within_10"])
+        )
+        assert figures["inference_contact"]["success_within_10"] <= (
+            1 - data["kinds"][kind]["impossible"]
+        )
+    markdown = format_markdown(data)
+    assert "| blocked | 3 | 100.0% | inference_contact | 0.0% | 0.000 | 100.0% |" in markdown
+    # An earlier run's JSON (no kinds) renders as before.
+    old = {key: data[key] for key in ("nominal_insertable", "impossible", "methods")}
+    assert format_kinds_markdown(old) == "" and "kind" not in format_markdown(old)

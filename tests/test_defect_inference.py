@@ -149,3 +149,26 @@ def test_study_reports_each_kind() -> None:
     # An earlier run's JSON (no kinds) renders as before.
     old = {key: data[key] for key in ("nominal_insertable", "impossible", "methods")}
     assert format_kinds_markdown(old) == "" and "kind" not in format_markdown(old)
+
+
+def test_physics_study_per_kind() -> None:
+    """MuJoCo outcomes: burred workpieces insert, blocked ones (either hole) are reported
+    not insertable and never insert."""
+    config = StudyConfig(
+        samples=1,
+        seed=0,
+        particles=200,
+        workers=1,
+        kind_samples=4,
+        physics=True,
+        kinds=("burr", "blocked"),
+        methods=("inference_contact",),
+    )
+    result = run_study(config)
+    blocked = result.kinds["blocked"]
+    holes = {spec.blocked_holes for spec in kind_workpieces("blocked", 4, 0)}
+    assert holes == {(0,), (1,)}
+    assert not blocked["attempts"]["inference_contact"].any()
+    assert blocked["not_insertable"]["inference_contact"].all()
+    burr = result.kinds["burr"]
+    assert (burr["attempts"]["inference_contact"] > 0).sum() >= burr["insertable"].sum() - 1

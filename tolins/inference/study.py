@@ -389,7 +389,7 @@ def _lockstep_physics(
 
     if specs is None:
         specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
-    batch = AttemptBatch(SOCKET, slots=min(64, len(runs)), num_threads=1)
+    batch = AttemptBatch(specs[0], slots=min(64, len(runs)), num_threads=1)
     results, pending = {}, {}
     for key, run in runs.items():
         try:

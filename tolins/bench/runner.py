@@ -297,7 +297,12 @@ def _study(profile: Profile, backend: str, workers: int = 2):
     from tolins.inference.study import StudyConfig
 
     return StudyConfig(
-        samples=profile.study_samples, seed=0, workers=workers, physics=backend == "mujoco"
+        samples=profile.study_samples,
+        seed=0,
+        workers=workers,
+        physics=backend == "mujoco",
+        # Pitch, burr and blocked workpieces besides the bent ones (issue 22), 12 each.
+        kind_samples=min(StudyConfig.kind_samples, profile.study_samples),
     )
 
 

@@ -51,7 +51,7 @@ class Profile:
     rl_env_steps: int | None = None
     rl_reward_mode: str = "dense"
     rl_curve_points: int = 10
-    robustness_episodes: int = 10
+    robustness_episodes: int = 6
 
     @property
     def rs_gail_env_steps(self) -> int:
@@ -111,7 +111,7 @@ PROFILES: dict[str, Profile] = {
     # of the paper's per-seed budgets (10 RS-GAIL iterations for π_n, 8 for φ2), 50
     # evaluation episodes per row and seed; the baselines get 3,000 env steps each
     # (RS-GAIL's π_n: 28,800), the start of their curves only (benchmarks/README.md);
-    # 10 episodes per robustness cell and seed (the default; 50 cells, docs/benchmark.md).
+    # 6 episodes per robustness cell and seed (the default; 50 cells, docs/benchmark.md).
     "quick": Profile("quick", 50, 200, 10, 8, 16, 4, 8, 50, 3, 500, 2, rl_env_steps=3_000),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
     "tiny": Profile(

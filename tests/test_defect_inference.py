@@ -172,3 +172,12 @@ def test_physics_study_per_kind() -> None:
     assert blocked["not_insertable"]["inference_contact"].all()
     burr = result.kinds["burr"]
     assert (burr["attempts"]["inference_contact"] > 0).sum() >= burr["insertable"].sum() - 1
+
+
+def test_bench_study_stage_reports_the_kinds() -> None:
+    from tolins.bench.profiles import PROFILES
+    from tolins.bench.runner import _study
+
+    quick = _study(PROFILES["quick"], "mujoco")
+    assert quick.kinds == ("bent", "pitch", "burr", "blocked") and quick.kind_samples == 12
+    assert _study(PROFILES["tiny"], "mujoco").kind_samples <= PROFILES["tiny"].study_samples

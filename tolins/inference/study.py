@@ -393,9 +393,12 @@ def _lockstep_physics(
     (workpiece ``k``: ``SOCKET`` with ``offsets[k]``, or ``specs[k]``)."""
     from tolins.inference.physics import AttemptBatch
 
+    layout = SOCKET  # a kind's own workpiece layout (a plug, burrs) for ``specs``
     if specs is None:
         specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
-    batch = AttemptBatch(specs[0], slots=min(64, len(runs)), num_threads=1)
+    else:
+        layout = specs[0]
+    batch = AttemptBatch(layout, slots=min(64, len(runs)), num_threads=1)
     results, pending = {}, {}
     for key, run in runs.items():
         try:

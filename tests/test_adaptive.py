@@ -66,3 +66,20 @@ def test_deterministic_for_a_seed() -> None:
     for (a, goals_a), (b, goals_b) in zip(first, second, strict=True):
         assert a == b
         np.testing.assert_array_equal(goals_a, goals_b)
+
+
+def test_defect_model_reports_a_blocked_hole_not_insertable_and_inserts_the_others() -> None:
+    """With the defect model the wrapper stops re-planning on a plugged hole (issue 22)."""
+    from tolins.inference.posterior import DefectModel
+
+    model = DefectModel(0.12, pitch_sigma=0.02, burr_sigma=0.08, blocked_prior=0.1)
+    plugged = dataclasses.replace(NOMINAL, blocked_holes=(1,))
+    for spec, inserts in ((plugged, False), (NOMINAL, True), (BENT, True)):
+        env = InsertionEnv(spec, measurement_noise=0.0)
+        wrapper = InferenceGuidedPolicy(
+            SafeExpert(), env, spec=NOMINAL, sigma=0.12, model=model, n_samples=400
+        )
+        wrapper.reset(0)
+        assert run_episode(env, wrapper, seed=0).success == inserts
+        assert wrapper.not_insertable == (not inserts)
+        assert wrapper.replans < wrapper.max_replans

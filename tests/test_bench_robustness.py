@@ -90,12 +90,16 @@ def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tmp_path)
     assert main(["compare", str(tmp_path), str(tmp_path / "b")]) == 0
 
 
-def test_only_the_experts_when_the_rows_train_no_circle_policy(tmp_path):
+def test_only_the_experts_when_the_rows_train_no_circle_policy_and_cis_over_seeds(tmp_path):
     config = BenchConfig(
-        profile="tiny", backend="kinematic", rows="C1.1", out=str(tmp_path), study=False
+        profile="tiny", backend="kinematic", rows="C1.1", seeds=2, out=str(tmp_path), study=False
     )
     run = run_bench(config, progress=False, log=lambda _: None)
     assert [p["id"] for p in run.robustness["policies"]] == ["safe", "efficient"]
+    cell = run.robustness["cells"]["safe"]["fit50"]
+    assert (cell["ci_over"], cell["ci_n"], cell["seeds"]) == ("seeds", 2, 2)
+    assert len(cell["success_per_seed"]) == 2
+    assert "95 % CI over the 2 training seeds" in (tmp_path / "results.md").read_text()
 
 
 def test_an_expert_on_mujoco_fails_blocked_holes_and_repeats_its_row(tmp_path):

@@ -2,10 +2,13 @@
 
     python benchmarks/embedding_quality.py                 # 500 held-out workpieces a family
     python benchmarks/embedding_quality.py --count 50 --figure ''   # quick, no figure
+    python benchmarks/embedding_quality.py --model graded --figure ''  # the graded model
 
 Prints, per family, the mean region IoU (``image >= 0``) over held-out workpieces
 (:func:`tolins.learning.embedding_eval.held_out_specs`), the worst IoU, and the θ error inside
 the true region; then writes ground truth beside prediction for a few named workpieces.
+With ``--model graded``: the graded checkpoints on held-out workpieces of the graded
+ranges, then on each tolerance-grade preset (``GRADE_TASKS``) and each paper preset.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from tolins import CircularSocket, PolygonSocket, embedding, tolerance
+from tolins.envs.tasks import GRADE_TASKS, TASKS
 from tolins.learning.embedding_eval import held_out_specs, measure
 
 #: Shown in the figure: the paper's Fig. 3 pair first (2*2, pins 0.3 / holes 0.5 mm,
@@ -34,18 +38,40 @@ FIGURE_SPECS = [
 ]
 
 
-def report(count: int) -> None:
+def report(count: int, model: str = "paper") -> None:
     print(
         "| family | held-out workpieces | region IoU (mean) | worst IoU | θ error (rad) "
         "| θ error / image max |"
     )
     print("|---|---|---|---|---|---|")
     for family in ("circle", "polygon"):
-        quality = measure(embedding.load_model(family), held_out_specs(family, count))
+        quality = measure(
+            embedding.load_model(family, model), held_out_specs(family, count, model=model)
+        )
         print(
             f"| {family} | {quality.count} | {quality.iou:.3f} | {quality.worst_iou:.3f} "
             f"| {quality.theta_error:.4f} | {quality.relative_theta_error:.1%} |"
         )
+
+
+def presets(model: str) -> None:
+    """Region IoU and θ error of each grade preset (then each paper preset) under ``model``."""
+    print("\n| preset | clearance (µm) | region IoU | θ error (rad) |")
+    print("|---|---|---|---|")
+    ious: dict[str, list[float]] = {"grade": [], "paper": []}
+    for group, tasks in (("grade", GRADE_TASKS), ("paper", TASKS)):
+        for task in tasks:
+            spec = task.socket
+            if spec.is_defective:
+                continue
+            quality = measure(embedding.load_model(spec.family, model), [spec])
+            ious[group].append(quality.iou)
+            print(
+                f"| {task.name} | {spec.clearance * 1e3:.0f} | {quality.iou:.3f} "
+                f"| {quality.theta_error:.4f} |"
+            )
+    for group, values in ious.items():
+        print(f"{group} presets: mean IoU {np.mean(values):.3f}, worst {np.min(values):.3f}")
 
 
 def figure(path: str) -> None:
@@ -90,10 +116,15 @@ def main() -> None:
     parser.add_argument(
         "--figure", default="docs/embedding_reconstruction.png", help="PNG ('' for none)"
     )
+    parser.add_argument(
+        "--model", choices=("paper", "graded"), default="paper", help="embedding checkpoints"
+    )
     args = parser.parse_args()
     start = time.perf_counter()
-    report(args.count)
-    if args.figure:
+    report(args.count, args.model)
+    if args.model != "paper":
+        presets(args.model)
+    if args.figure and args.model == "paper":
         figure(args.figure)
     print(f"{time.perf_counter() - start:.1f} s")
 

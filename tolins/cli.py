@@ -100,7 +100,8 @@ def _embed_train(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"tolins embed train: {error}", file=sys.stderr)
         return 2
-    out = cli_checks.output_file("--out", args.out or f"runs/embedding_{config.family}.pt")
+    suffix = "" if config.model == "paper" else f"_{config.model}"
+    out = cli_checks.output_file("--out", args.out or f"runs/embedding_{config.family}{suffix}.pt")
     from tqdm import tqdm
 
     from tolins.learning.checkpoint import save_checkpoint
@@ -121,7 +122,9 @@ def _embed_train(args: argparse.Namespace) -> int:
             print(f"tolins embed train: {error}", file=sys.stderr)
             return 2
     path = save_checkpoint(out, result.model)
-    quality = measure(result.model, held_out_specs(config.family, args.held_out))
+    quality = measure(
+        result.model, held_out_specs(config.family, args.held_out, model=config.model)
+    )
     print(
         f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB, {time.perf_counter() - start:.0f} s); "
         f"{quality.count} held-out workpieces: region IoU {quality.iou:.3f} "

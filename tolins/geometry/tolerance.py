@@ -48,14 +48,24 @@ class ImageWindow:
     Attributes:
         half_width: The samples span ``[-half_width, half_width]`` mm in x and in y.
         theta_cap: Larger rotations (up to free turning) are stored as ``theta_cap`` rad.
+        warp: Exponent ``p`` of the grid: the sample at ``u`` ∈ [-1, 1] (evenly spaced)
+            lies at ``half_width · sign(u) · |u|^p``. 1 (the default): the linear grid;
+            2: cells fine near the origin and coarse at the edge (the graded embedding).
     """
 
     half_width: float
     theta_cap: float
+    warp: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.warp) and self.warp > 0):
+            raise ValueError(f"warp={self.warp!r}; allowed: a finite number > 0")
 
     def axis(self, resolution: int) -> np.ndarray:
         """The ``resolution`` sample coordinates along x (and y), both edges included."""
         steps = np.arange(resolution) * (2.0 / (resolution - 1)) - 1.0
+        if self.warp != 1.0:
+            steps = np.sign(steps) * np.abs(steps) ** self.warp
         return self.half_width * steps
 
 
@@ -66,6 +76,13 @@ class ImageWindow:
 WINDOWS = {
     "circle": ImageWindow(half_width=0.4, theta_cap=0.5),
     "polygon": ImageWindow(half_width=0.25, theta_cap=0.5),
+}
+#: The windows of the graded embedding (``tolins.embedding.encode(spec, model="graded")``):
+#: the same squares, sampled on a warped grid (``warp=2``) so that the 20 µm regions of the
+#: tolerance grades span ~14 cells at 64² (a linear grid: 12.7 µm per cell on circles).
+GRADED_WINDOWS = {
+    "circle": ImageWindow(half_width=0.4, theta_cap=0.5, warp=2.0),
+    "polygon": ImageWindow(half_width=0.25, theta_cap=0.5, warp=2.0),
 }
 
 

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from tolins.geometry.tolerance import WINDOWS, ImageWindow
+from tolins.geometry.tolerance import GRADED_WINDOWS, WINDOWS, ImageWindow
 from tolins.learning.artefacts import atomic_torch_save, load_payload
 from tolins.learning.autoencoder import Architecture, ToleranceAutoencoder
 from tolins.learning.ranges import FamilyRanges, ranges_from_dict
@@ -65,17 +65,22 @@ def load_checkpoint(path: str | os.PathLike, family: str | None = None) -> Embed
     if family is not None and stored != family:
         raise ValueError(f"{path} is a {stored!r} checkpoint; allowed: {family!r}")
     window = ImageWindow(**payload["window"])
-    if window != WINDOWS[stored]:
+    # Checkpoints before the graded model have no ``model`` in their config: the paper's.
+    model = payload["config"].get("model", "paper")
+    if model not in ("paper", "graded"):
+        raise ValueError(f"{path} is a {model!r} model; allowed: 'paper', 'graded'")
+    expected = (WINDOWS if model == "paper" else GRADED_WINDOWS)[stored]
+    if window != expected:
         raise ValueError(
             f"{path} was trained on the window {window}; this tolins images {stored} "
-            f"workpieces in {WINDOWS[stored]}: retrain with `tolins embed train`"
+            f"workpieces of the {model} model in {expected}: retrain with `tolins embed train`"
         )
     network = _network(path, payload["architecture"], payload["state_dict"])
     return EmbeddingModel(
         family=stored,
         network=network,
         window=window,
-        ranges=ranges_from_dict(stored, payload["ranges"]),
+        ranges=ranges_from_dict(stored, payload["ranges"], model),
         config=payload["config"],
         seed=payload["seed"],
         tolins_version=payload["tolins_version"],

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from tolins.geometry.validation import check_seed
-from tolins.learning.ranges import RANGES
+from tolins.learning.ranges import MODELS, RANGES
 
 
 @dataclass(frozen=True)
@@ -30,11 +30,16 @@ class EmbeddingTrainConfig:
     """Weight ``w`` of the θ regression term against the region BCE in the loss."""
     threads: int = 2
     """CPU threads torch may use while training."""
+    model: Literal["paper", "graded"] = "paper"
+    """paper: the shipped ranges and linear window; graded: the tolerance grades' ranges
+    (circle clearance 0.015–0.35 mm, polygon gap 0.02–0.2 mm) on the warped window."""
 
     def __post_init__(self) -> None:
         if self.family not in RANGES:
             raise ValueError(f"family={self.family!r}; allowed: {', '.join(RANGES)}")
         check_seed("seed", self.seed)
+        if self.model not in MODELS:
+            raise ValueError(f"model={self.model!r}; allowed: {', '.join(MODELS)}")
         for name in ("workpieces", "epochs", "batch_size", "threads"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name}={getattr(self, name)!r}; allowed: an integer ≥ 1")

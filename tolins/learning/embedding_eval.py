@@ -10,7 +10,7 @@ import torch
 from tolins.geometry.specs import SocketSpec
 from tolins.learning.autoencoder import to_image, to_targets
 from tolins.learning.checkpoint import EmbeddingModel
-from tolins.learning.embedding_data import make_images, sample_specs
+from tolins.learning.embedding_data import family_ranges, make_images, sample_specs
 
 #: Seed of the held-out workpieces. Specs have continuous fields, so a set drawn from
 #: another stream than the training data shares no workpiece with it.
@@ -52,7 +52,7 @@ def region_iou(truth: np.ndarray, predicted: np.ndarray) -> np.ndarray:
 
 def measure(model: EmbeddingModel, specs: list[SocketSpec]) -> Quality:
     """Reconstruct the tolerance images of ``specs`` and score them."""
-    truth = make_images(specs, model.network.architecture.resolution)
+    truth = make_images(specs, model.network.architecture.resolution, model.window)
     predicted, theta = reconstruct_images(model, truth)
     iou = region_iou(truth, predicted)
     inside = truth >= 0
@@ -71,6 +71,10 @@ def measure(model: EmbeddingModel, specs: list[SocketSpec]) -> Quality:
     )
 
 
-def held_out_specs(family: str, count: int, seed: int = HELD_OUT_SEED) -> list[SocketSpec]:
-    """``count`` workpieces of ``family`` drawn from its ranges with a held-out seed."""
-    return sample_specs(family, count, np.random.default_rng([seed, 1]))
+def held_out_specs(
+    family: str, count: int, seed: int = HELD_OUT_SEED, *, model: str = "paper"
+) -> list[SocketSpec]:
+    """``count`` workpieces of ``family`` drawn from the ranges of ``model`` ("paper",
+    "graded") with a held-out seed."""
+    ranges = family_ranges(family, model)
+    return sample_specs(family, count, np.random.default_rng([seed, 1]), ranges)

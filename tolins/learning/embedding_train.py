@@ -11,7 +11,6 @@ import numpy as np
 import torch
 
 import tolins
-from tolins.geometry.tolerance import WINDOWS
 from tolins.learning.artefacts import check_finite_training
 from tolins.learning.autoencoder import (
     Architecture,
@@ -21,7 +20,12 @@ from tolins.learning.autoencoder import (
 )
 from tolins.learning.checkpoint import EmbeddingModel
 from tolins.learning.embedding_config import EmbeddingTrainConfig
-from tolins.learning.embedding_data import family_ranges, make_images, sample_specs
+from tolins.learning.embedding_data import (
+    family_ranges,
+    make_images,
+    model_window,
+    sample_specs,
+)
 
 
 @dataclass
@@ -56,10 +60,11 @@ def _train(
     config: EmbeddingTrainConfig, on_epoch: Callable[[int, float], None] | None
 ) -> TrainResult:
     rng = np.random.default_rng(config.seed)
-    window = WINDOWS[config.family]
+    window = model_window(config.family, config.model)
+    ranges = family_ranges(config.family, config.model)
     architecture = Architecture()
-    specs = sample_specs(config.family, config.workpieces, rng)
-    targets = to_targets(make_images(specs, architecture.resolution), window.theta_cap)
+    specs = sample_specs(config.family, config.workpieces, rng, ranges)
+    targets = to_targets(make_images(specs, architecture.resolution, window), window.theta_cap)
     torch.manual_seed(config.seed)
     network = ToleranceAutoencoder(architecture)
     optimizer = torch.optim.Adam(network.parameters(), lr=config.learning_rate)
@@ -102,7 +107,7 @@ def _train(
         family=config.family,
         network=network.eval(),
         window=window,
-        ranges=family_ranges(config.family),
+        ranges=ranges,
         config=dataclasses.asdict(config),
         seed=config.seed,
         tolins_version=tolins.__version__,

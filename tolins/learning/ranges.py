@@ -9,6 +9,10 @@
   0.2 mm gap, reaches 0.2 mm from the origin, inside the ±0.25 mm polygon window.
 
 Every range is closed and sampled uniformly (integers inclusive).
+
+The graded embedding (:data:`GRADED_RANGES`) widens both families to the tolerance grades:
+circle radial clearance 0.015–0.35 mm (any pin radius 0.25–0.35 mm), polygon gap
+0.02–0.2 mm, each clearance (gap) drawn log-uniformly.
 """
 
 from __future__ import annotations
@@ -78,10 +82,73 @@ class PolygonRanges:
         return _outside(self, spec)
 
 
+@dataclass(frozen=True)
+class GradedCircleRanges(CircleRanges):
+    """The circle family of the graded embedding: radial clearance ``hole - pin``
+    0.015–0.35 mm (the grades' 20, 50 and 100 µm and the paper's 0.2 mm), drawn
+    log-uniformly so that the fine fits are as frequent as the loose ones."""
+
+    hole_radius: tuple[float, float] = (0.265, 0.7)
+    clearance: tuple[float, float] = (0.015, 0.35)
+
+    def sample(self, rng: np.random.Generator) -> CircularSocket:
+        """One nominal socket: pin radius, log-uniform clearance, then the other fields."""
+        rows = int(rng.integers(self.rows[0], self.rows[1] + 1))
+        cols = int(rng.integers(self.cols[0], self.cols[1] + 1))
+        pin = float(rng.uniform(*self.pin_radius))
+        clearance = _log_uniform(rng, self.clearance)
+        return CircularSocket(
+            rows=rows,
+            cols=cols,
+            pin_radius=pin,
+            hole_radius=pin + clearance,
+            row_pitch=float(rng.uniform(*self.row_pitch)),
+            col_pitch=float(rng.uniform(*self.col_pitch)),
+        )
+
+
+@dataclass(frozen=True)
+class GradedPolygonRanges(PolygonRanges):
+    """The polygon family of the graded embedding: circumradius gap 0.02–0.2 mm (the
+    grades' 20 µm square and hexagon: 0.028 and 0.023 mm), drawn log-uniformly."""
+
+    gap: tuple[float, float] = (0.02, 0.2)
+
+    def sample(self, rng: np.random.Generator) -> PolygonSocket:
+        """One peg: sides, circumradius, then a log-uniform gap."""
+        sides = int(rng.integers(self.sides[0], self.sides[1] + 1))
+        pin = float(rng.uniform(*self.pin_circumradius))
+        return PolygonSocket(
+            sides=sides, pin_circumradius=pin, hole_circumradius=pin + _log_uniform(rng, self.gap)
+        )
+
+
+def _log_uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    low, high = bounds
+    return float(np.exp(rng.uniform(np.log(low), np.log(high))))
+
+
 FamilyRanges = CircleRanges | PolygonRanges
 
 #: The ranges of each family, as trained for the shipped checkpoints.
 RANGES: dict[str, FamilyRanges] = {"circle": CircleRanges(), "polygon": PolygonRanges()}
+#: The ranges of the graded checkpoints (``assets/embedding_<family>_graded.pt``).
+GRADED_RANGES: dict[str, FamilyRanges] = {
+    "circle": GradedCircleRanges(),
+    "polygon": GradedPolygonRanges(),
+}
+#: The embedding models: the paper's (default) and the graded one.
+MODELS = ("paper", "graded")
+
+
+def model_ranges(family: str, model: str = "paper") -> FamilyRanges:
+    """The ranges of ``family`` ("circle" or "polygon") for ``model`` ("paper", "graded")."""
+    if family not in RANGES:
+        raise ValueError(f"family={family!r}; allowed: {', '.join(RANGES)}")
+    if model not in MODELS:
+        raise ValueError(f"model={model!r}; allowed: {', '.join(map(repr, MODELS))}")
+    return (RANGES if model == "paper" else GRADED_RANGES)[family]
+
 
 # Specs on a range's edge must pass despite float rounding (e.g. pin + gap).
 _SLACK = 1e-9
@@ -100,7 +167,7 @@ def _outside(ranges: FamilyRanges, spec: SocketSpec) -> list[str]:
     return found
 
 
-def ranges_from_dict(family: str, values: dict[str, object]) -> FamilyRanges:
+def ranges_from_dict(family: str, values: dict[str, object], model: str = "paper") -> FamilyRanges:
     """Ranges of ``family`` from their stored form (a checkpoint's ``ranges``)."""
-    cls = CircleRanges if family == "circle" else PolygonRanges
+    cls = type(model_ranges(family, model))
     return cls(**{key: tuple(value) for key, value in values.items()})

@@ -17,12 +17,15 @@ from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
 from tolins.rollouts.pool import CandidatePool
 
 
-def workpieces(env_ids: list[str], embeddings: list[np.ndarray] | None = None) -> list[Workpiece]:
-    """The envs with their embeddings (encoded from each env's socket unless given)."""
+def workpieces(
+    env_ids: list[str], embeddings: list[np.ndarray] | None = None, *, model: str = "paper"
+) -> list[Workpiece]:
+    """The envs with their embeddings (encoded from each env's socket unless given, with
+    the embedding ``model``: the paper's, or ``"graded"`` for the tolerance grades)."""
     if embeddings is None:
         from tolins.embedding import encode
 
-        embeddings = [encode(gym.spec(env_id).kwargs["socket"]) for env_id in env_ids]
+        embeddings = [encode(gym.spec(env_id).kwargs["socket"], model=model) for env_id in env_ids]
     if len(embeddings) != len(env_ids):
         raise ValueError(f"{len(embeddings)} embeddings for {len(env_ids)} envs; allowed: one each")
     return [

@@ -10,12 +10,12 @@ import pytest
 
 pytest.importorskip("minari")
 
-from tolins.bench.config import BenchConfig  # noqa: E402
-from tolins.bench.profiles import PROFILES  # noqa: E402
-from tolins.bench.runner import run_bench  # noqa: E402
-from tolins.bench.table import CIRCLE_2X2, CIRCLE_2X8  # noqa: E402
-from tolins.learning import runs  # noqa: E402
-from tolins.learning.policy import load_policy  # noqa: E402
+from tolins.bench.config import BenchConfig
+from tolins.bench.profiles import PROFILES
+from tolins.bench.runner import run_bench
+from tolins.bench.table import CIRCLE_2X2, CIRCLE_2X8
+from tolins.learning import runs
+from tolins.learning.policy import load_policy
 
 
 def _stage(out, prefix):
@@ -66,7 +66,7 @@ def test_bench_trainings_read_minari_datasets_and_equal_inline_demonstrations(tm
     )
     for stage, folder in (("bc_safe", "bc"), ("pi_n_safe", "pi_n"), ("pi_phi_circle", "pi_phi")):
         bench_folder = _stage(out, f"{stage}-seed0")
-        ours, metadata = load_policy(bench_folder / "policy.pt")
+        ours, _ = load_policy(bench_folder / "policy.pt")
         theirs, _ = load_policy(inline / folder / "policy.pt")
         assert np.array_equal(ours.get_flat(), theirs.get_flat()), stage
         recorded = json.loads((bench_folder / "run.json").read_text())["configs"]["demos"]

@@ -4,8 +4,8 @@
 on the kinematic backend, and the single env's kinematic backend is a batch of one
 (:class:`~tolins.envs.kinematic_backend.KinematicBackend`). The simulations that step
 together and share a workpiece (every one, unless bent pins are drawn per episode) move
-in one call of :func:`~tolins.envs.kinematic_backend.kinematic_step`, whose rows are independent: each
-is the single env's step bit for bit.
+in one call of :func:`~tolins.envs.kinematic_backend.kinematic_step`, whose rows are
+independent: each is the single env's step bit for bit.
 """
 
 from __future__ import annotations

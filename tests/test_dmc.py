@@ -120,17 +120,7 @@ def test_an_int_seed_replays_the_gym_envs_episodes(domain: str, task: str) -> No
     for episode in range(2):
         observation, _ = gym_env.reset(seed=3 if episode == 0 else None)
         assert np.array_equal(_flat(env.reset().observation), observation)
-        for _ in range(HORIZON):
-            action = np.append(rng.uniform(-A_MAX[:3], A_MAX[:3]) * 0.3, -A_MAX[3])
-            observation, reward, terminated, truncated, info = gym_env.step(action)
-            timestep = env.step(action)
-            assert np.array_equal(_flat(timestep.observation), observation)
-            assert timestep.reward == reward
-            assert np.array_equal(env.physics.pose(), info["pose"])
-            assert timestep.last() == (terminated or truncated)
-            if timestep.last():
-                break
-        assert env.task.score.collisions == info["n_collisions"]
+        info = _same_episode(gym_env, env, rng)
     assert info["n_collisions"] > 0  # the actions did reach the board
 
 
@@ -213,17 +203,7 @@ def test_defects_draw_the_gym_envs_workpiece_and_replay_its_episode(defects) -> 
         assert env.task.socket == gym_env.socket and env.task.socket.is_defective
         pins = env.physics.named.model.geom_pos["pin0"]
         assert np.array_equal(pins, gym_env.unwrapped.backend.model.geom("pin0").pos)
-        for _ in range(HORIZON):
-            action = np.append(rng.uniform(-A_MAX[:3], A_MAX[:3]) * 0.3, -A_MAX[3])
-            observation, reward, terminated, truncated, info = gym_env.step(action)
-            timestep = env.step(action)
-            assert np.array_equal(_flat(timestep.observation), observation)
-            assert timestep.reward == reward
-            assert np.array_equal(env.physics.pose(), info["pose"])
-            assert timestep.last() == (terminated or truncated)
-            if timestep.last():
-                break
-        assert env.task.score.collisions == info["n_collisions"]
+        _same_episode(gym_env, env, rng)
     with pytest.raises(ValueError, match=r"pose=.*\(defects\).*z ≥ 0"):
         dmc.load("circle2x2", "insert", task_kwargs={"pose": [0, 0, 0, -0.5], "defects": defects})
 
@@ -328,3 +308,20 @@ def test_plain_import_of_tolins_does_not_load_dm_control() -> None:
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "False"
+
+
+def _same_episode(gym_env, env, rng: np.random.Generator) -> dict:
+    """Step both (reset) envs with the same random descending actions until the episode
+    ends, checking that each step agrees; the gym env's last info."""
+    for _ in range(HORIZON):
+        action = np.append(rng.uniform(-A_MAX[:3], A_MAX[:3]) * 0.3, -A_MAX[3])
+        observation, reward, terminated, truncated, info = gym_env.step(action)
+        timestep = env.step(action)
+        assert np.array_equal(_flat(timestep.observation), observation)
+        assert timestep.reward == reward
+        assert np.array_equal(env.physics.pose(), info["pose"])
+        assert timestep.last() == (terminated or truncated)
+        if timestep.last():
+            break
+    assert env.task.score.collisions == info["n_collisions"]
+    return info

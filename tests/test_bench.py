@@ -248,3 +248,17 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
     assert again.study == whole.study
     for name in ("results.json", "inference.json"):
         assert (tmp_path / "c" / name).read_text() == (tmp_path / "whole" / name).read_text()
+
+
+def test_timeline_kinds_of_every_stage_name():
+    from tolins.bench.timeline import KINDS, stage_kind
+
+    kinds = {
+        "demos-Circle2x2-safe-seed0-0": "demonstrations",
+        "bc_safe-seed0": "training",
+        "eval-C2.3-seed1": "evaluation",
+        "robust-pi_phi_star-seed2": "evaluation",
+        "inference-study": "study",
+    }
+    assert {name: stage_kind(name) for name in kinds} == kinds
+    assert set(kinds.values()) == set(KINDS)

@@ -22,7 +22,7 @@ KINDS = {
 
 def stage_kind(name: str) -> str:
     """``demonstrations``, ``training``, ``evaluation`` or ``study`` for a stage name."""
-    if name.startswith("eval-"):
+    if name.startswith(("eval-", "robust-")):  # Table 1's and the robustness table's
         return "evaluation"
     if name.startswith("demos-"):
         return "demonstrations"

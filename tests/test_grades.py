@@ -88,3 +88,31 @@ def test_inside_inserts_and_beyond_the_band_is_blocked(name, axis) -> None:
         pose[axis] = share * limit
         infos = push_down(task.socket, pose, steps=5)
         assert infos[-1]["success"] == inserts, (share, infos[-1]["pose"])
+
+
+@pytest.mark.parametrize("um", [50, 20])
+def test_the_inference_finds_goals_on_bent_graded_sockets(um) -> None:
+    """Bent pins of std a half clearance on a graded 2*2: the inference takes the graded
+    socket and its goals insert a workpiece the nominal goal does not (exact geometry
+    outcomes; from binary outcomes alone, so a few attempts)."""
+    import numpy as np
+
+    from tolins.geometry.defects import sample_defects
+    from tolins.geometry.tolerance import contains
+    from tolins.inference import History
+    from tolins.inference.goal import next_goal
+
+    nominal = gym.spec(f"tolins/Circle2x2Fit{um}-v1").kwargs["socket"]
+    sigma = um / 1000 / 2
+    rescued = 0
+    for k in range(8):
+        workpiece = sample_defects(nominal, sigma=sigma, rng=k)
+        rng, goal, poses, inserted = np.random.default_rng(k), np.zeros(3), [], []
+        for _ in range(10):
+            poses.append(goal)
+            inserted.append(bool(contains(workpiece, goal[None])[0]))
+            if inserted[-1]:
+                rescued += len(poses) > 1
+                break
+            goal = next_goal(nominal, History(np.array(poses), np.array(inserted)), sigma, rng).goal
+    assert rescued >= 1

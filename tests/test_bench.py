@@ -178,7 +178,11 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert len(again.cached) == 42
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
-    run_bench(BenchConfig(profile="tiny", backend="mujoco", out=str(tmp_path), study=False))
+    # the robustness table on MuJoCo: tests/test_bench_robustness.py
+    mujoco = BenchConfig(
+        profile="tiny", backend="mujoco", out=str(tmp_path), study=False, robustness=False
+    )
+    run_bench(mujoco)
     results = json.loads((tmp_path / "results.json").read_text())["rows"]
     assert list(results) == list(ALL_ROW_IDS)
     markdown = (tmp_path / "results.md").read_text()
@@ -187,10 +191,17 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert not (tmp_path / "inference.json").exists()  # not the kinematic run's study
 
 
+def _no_sections(out) -> BenchConfig:
+    """The tiny kinematic bench without the study and the robustness table."""
+    return BenchConfig(
+        profile="tiny", backend="kinematic", out=str(out), study=False, robustness=False
+    )
+
+
 @pytest.mark.slow
 def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
     whole = run_bench(
-        BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path / "whole"), study=False),
+        _no_sections(tmp_path / "whole"),
         progress=False,
         log=lambda _: None,
     )
@@ -199,7 +210,7 @@ def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
         if line.startswith("training pi_phi_circle"):
             raise KeyboardInterrupt
 
-    config = BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path / "b"), study=False)
+    config = _no_sections(tmp_path / "b")
     with pytest.raises(KeyboardInterrupt):
         run_bench(config, progress=False, log=interrupt)
     assert not (tmp_path / "b" / "results.json").exists()  # nothing reported half-way

@@ -277,13 +277,13 @@ def test_cli_help_lists_every_method(capsys) -> None:
 
 
 def test_physics_contact_evidence_matches_geometry() -> None:
-    from tolins.inference.physics import make_backend, physics_attempt
+    from tolins.inference.physics import physics_attempt
 
     rng = _rng(8)
     eps = np.array([[0.05, -0.1], [0.25, 0.1]])
-    backend = make_backend(CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps))
+    workpiece = CircularSocket(2, 1, row_pitch=5.0, pin_offsets=eps)
     for goal in rng.normal(0, [0.12, 0.12, 0.03], size=(6, 3)):
-        inserted, blocked, bearings = physics_attempt(backend, goal)
+        inserted, blocked, bearings = physics_attempt(workpiece, goal)
         gaps = pin_gaps(SPEC, eps, goal)
         inside = np.linalg.norm(gaps, axis=-1) <= SPEC.clearance
         assert inserted == inside.all()

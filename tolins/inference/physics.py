@@ -21,30 +21,16 @@ from tolins.paper import A_MAX, CONTROL_DT
 
 
 def physics_attempt(
-    backend: MujocoBackend,
-    goal: object,
-    *,
-    start_height: float = 0.05,
-    success_depth: float = 1.0,
-    steps: int = 4,
-    touch_force: float = 0.05,
+    workpiece: CircularSocket, goal: object, **push: float
 ) -> tuple[bool, np.ndarray, np.ndarray]:
-    """``(inserted, blocked, bearings)`` of one downward push at ``goal`` ``[x, y, theta]``.
-
-    ``bearings`` ``(n_pins,)`` (rad) are NaN for the pins not blocked.
-    """
-    x, y, theta = np.asarray(goal, dtype=float)
-    backend.reset(np.array([x, y, theta, start_height]))
-    push = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
-    for _ in range(steps):
-        state = backend.step(push)
-        if state.error:
-            raise RuntimeError(f"physics attempt at {goal!r}: {state.error}")
-        if in_holes(backend.spec, state.pose, success_depth):
-            free = np.zeros(backend.spec.n_pins, dtype=bool)
-            return True, free, np.full(backend.spec.n_pins, np.nan)
-    blocked = backend.pin_forces() > touch_force
-    return False, blocked, touch_bearings(backend, blocked)
+    """``(inserted, blocked, bearings)`` of one downward push at ``goal`` ``[x, y, theta]``
+    on ``workpiece``: :meth:`AttemptBatch.attempts` of a batch of one (``push``: its
+    keywords). ``bearings`` ``(n_pins,)`` (rad) are NaN for the pins not blocked."""
+    batch = AttemptBatch(workpiece, slots=1, num_threads=1)
+    try:
+        return batch.attempts([(workpiece, np.asarray(goal, dtype=float))], **push)[0]
+    finally:
+        batch.close()
 
 
 def touch_bearings(backend: MujocoBackend, blocked: np.ndarray) -> np.ndarray:
@@ -59,9 +45,10 @@ def _bearings(points: np.ndarray, spec: CircularSocket, blocked: np.ndarray) -> 
 
 
 class AttemptBatch:
-    """Many workpieces' attempts at once, each :func:`physics_attempt`'s bit for bit: up to
-    ``slots`` downward pushes in one persistent :class:`~tolins.envs.mujoco_batch.MujocoBatch`
-    (each simulation on its own bent workpiece), stepped on ``num_threads`` threads.
+    """Many workpieces' attempts at once: up to ``slots`` downward pushes (the module
+    docstring) in one persistent :class:`~tolins.envs.mujoco_batch.MujocoBatch` (each
+    simulation on its own workpiece, each the single env's physics bit for bit), stepped
+    on ``num_threads`` threads.
 
     Args:
         spec: The nominal socket of the workpieces (one family, one model layout).
@@ -122,8 +109,3 @@ class AttemptBatch:
 
     def close(self) -> None:
         self.physics.close()
-
-
-def make_backend(spec: CircularSocket) -> MujocoBackend:
-    """A MuJoCo backend of the (bent) workpiece at the paper's control period."""
-    return MujocoBackend(spec, CONTROL_DT)

@@ -4,6 +4,7 @@ for bit, and the learners read them (tolins.datasets)."""
 from __future__ import annotations
 
 import json
+import sys
 
 import gymnasium as gym
 import numpy as np
@@ -242,3 +243,17 @@ def test_rs_gail_from_a_safe_expert_dataset_equals_todays(tmp_path):
     assert np.array_equal(
         np.load(tmp_path / "expert" / "means.npy"), np.load(tmp_path / "minari" / "means.npy")
     )
+
+
+def test_without_minari_each_user_says_what_to_install(tmp_path, capsys, monkeypatch):
+    from tolins.datasets.reader import require_minari
+
+    monkeypatch.setitem(sys.modules, "minari", None)  # import minari raises ImportError
+    with pytest.raises(ImportError, match=r"tolins bench needs Minari .*tolins\[data\]"):
+        require_minari("tolins bench")
+    for argv in (
+        ["dataset", "--env", "tolins/Circle2x2-v1", "--policy", "safe", "--out", str(tmp_path)],
+        ["train", "bc", "--env", "tolins/Circle2x2-v1", "--demos", "d", "--out", str(tmp_path)],
+    ):
+        assert main(argv) == 2
+        assert "needs Minari" in capsys.readouterr().err

@@ -21,7 +21,6 @@ from tolins.bench.stages import StageCache, stage_key
 
 #: The Minari id, and folder, of the dataset inside a demonstration stage.
 DATASET = "demonstrations-v0"
-INSTALL_DATA = "pip install 'tolins[data]'"
 
 
 @dataclass(frozen=True)
@@ -74,17 +73,6 @@ def demo_stages(
         DemoStage(env_id, expert, episodes, seed, index, backend)
         for index, env_id in enumerate(env_ids)
     ]
-
-
-def check_minari() -> None:
-    """Raise ``ImportError`` naming the extra to install unless Minari imports."""
-    try:
-        import minari  # noqa: F401
-    except ImportError as error:
-        raise ImportError(
-            f"tolins bench writes its demonstrations as Minari datasets and needs Minari "
-            f"({error}); allowed: {INSTALL_DATA}"
-        ) from None
 
 
 def demos_stage(root: Path, stage: DemoStage) -> Path:

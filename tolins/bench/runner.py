@@ -22,7 +22,7 @@ from tqdm import tqdm
 from tolins.atomic import atomic_json
 from tolins.bench.claims import check_claims
 from tolins.bench.config import EPISODES, RECORDING, BenchConfig, BenchRun
-from tolins.bench.demonstrations import check_minari, demos_stage
+from tolins.bench.demonstrations import demos_stage
 from tolins.bench.evaluation import episodes_to_json, eval_seeds, evaluate_row
 from tolins.bench.executor import Job, make_executor
 from tolins.bench.integrity import StageFileError, checked_episodes, read_json
@@ -35,6 +35,7 @@ from tolins.bench.stages import StageCache
 from tolins.bench.table import TRAININGS, Row, select_rows
 from tolins.bench.timeline import write_timeline
 from tolins.bench.training import Trainer, train_stage
+from tolins.datasets.reader import require_minari
 from tolins.rollouts.episodes import Episode
 
 STUDY = "inference.json"
@@ -66,7 +67,7 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         local = executor.name == "local"
         plan = _Plan(cache, log)
         if any(trainer.demo_stages(t.name, 0) for row in rows for t in row.trainings):
-            check_minari()
+            require_minari("tolins bench (its demonstrations are Minari datasets)")
         pool = executor.candidate_pool()
         _plan_trainings(plan, trainer, rows, seeds, pool, progress and local, log)
         _plan_evaluations(plan, trainer, rows, seeds)

@@ -77,10 +77,12 @@ def _run(args: argparse.Namespace) -> int:
     from tolins.datasets.writer import check_target
 
     prog = "tolins dataset"
+    from tolins.datasets.reader import require_minari
+
     try:
-        import minari  # noqa: F401
+        require_minari(prog)
     except ImportError as error:
-        return cli_checks.fail(prog, f"needs Minari ({error}); allowed: pip install 'tolins[data]'")
+        return cli_checks.fail(prog, error)
     try:
         entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
         name = args.name or default_name(args.env, _label(args))

@@ -21,6 +21,18 @@ from tolins.datasets.envspec import tolins_ids
 from tolins.datasets.writer import UNITS
 from tolins.rollouts.episodes import Rollout
 
+#: How to get Minari (the extra of :mod:`tolins.datasets`).
+INSTALL_DATA = "pip install 'tolins[data]'"
+
+
+def require_minari(user: str) -> None:
+    """Raise ``ImportError`` (``user`` needs Minari, and how to install it) unless Minari
+    imports; ``user`` names what needs it, e.g. ``tolins dataset``."""
+    try:
+        import minari  # noqa: F401
+    except ImportError as error:
+        raise ImportError(f"{user} needs Minari ({error}); allowed: {INSTALL_DATA}") from None
+
 
 def dataset_folder(source: str | os.PathLike) -> Path:
     """The ``data`` folder of the dataset ``source`` (a folder or a local Minari id);

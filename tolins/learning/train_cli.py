@@ -77,12 +77,12 @@ def _demos(args: argparse.Namespace):
     against ``--env``; ``None`` without the option. Raises ``ValueError``."""
     if getattr(args, "demos", None) is None:
         return None
+    from tolins.datasets.reader import load_demonstrations, require_minari
+
     try:
-        from tolins.datasets.reader import load_demonstrations
+        require_minari("--demos")
     except ImportError as error:
-        raise cli_checks.OptionError(
-            f"--demos needs Minari ({error}); allowed: after pip install 'tolins[data]'"
-        ) from None
+        raise cli_checks.OptionError(str(error)) from None
     from tolins.learning.runs import Demos
 
     return Demos(str(args.demos), load_demonstrations(args.demos, args.env))

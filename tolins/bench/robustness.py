@@ -169,7 +169,7 @@ def plan_robustness(plan: Any, trainer: Any, seeds: int) -> list[str]:
                 upstream = trainer.stage_name(policy.agent, seed)
                 if upstream not in plan:
                     break  # the selected rows do not train it
-                policy_stage = cache.folder(upstream, trainer.config(policy.agent, seed)).name
+                policy_stage = trainer.stage_folder_name(policy.agent, seed)
             name = stage_name(policy, seed)
             plan.add(
                 name,

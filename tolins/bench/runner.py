@@ -222,7 +222,7 @@ def _plan_evaluations(plan: _Plan, trainer: Trainer, rows: list[Row], seeds: int
             upstream = None if training is None else trainer.stage_name(training, seed)
             policy_stage = None
             if training is not None:
-                policy_stage = cache.folder(upstream, trainer.config(training, seed)).name
+                policy_stage = trainer.stage_folder_name(training, seed)
             plan.add(
                 f"eval-{row.id}-seed{seed}",
                 _evaluation_config(row, seed, policy_stage, profile, backend),

@@ -94,6 +94,11 @@ class Trainer:
         """The stage name of training ``name`` with ``seed``, e.g. ``pi_n_safe-seed0``."""
         return f"{name}-seed{seed}"
 
+    def stage_folder_name(self, name: str, seed: int) -> str:
+        """The folder name (``NAME-KEY``) of training ``name``'s stage with ``seed``: what
+        the stages evaluating its policy put in their configs."""
+        return self.cache.folder(self.stage_name(name, seed), self.config(name, seed)).name
+
     def train(
         self, name: str, seed: int, upstream: Path | None, pool: CandidatePool | None = None
     ) -> tuple[Path, bool]:

@@ -168,7 +168,7 @@ def test_reading_checks_env_and_spaces(tmp_path):
     [
         (["--recipe", "best"], "recipe 'best' is unknown; allowed: expert-safe"),
         (["--policy", "nope"], "policy 'nope': unknown"),
-        (["--policy", "nope"], "; or random, bc"),
+        (["--policy", "nope"], "; --policy takes a .zip/.pt file path"),
         (["--policy", "safe", "--name", "no spaces"], "is not a Minari dataset id"),
         (["--policy", "safe", "--recipe", "mixed"], "not allowed with argument"),
         (["--policy", "safe", "--episodes", "0"], "allowed: an integer ≥ 1"),

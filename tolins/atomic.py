@@ -1,9 +1,16 @@
-"""Atomic file writes: a reader sees the old file or the whole new one, never half of it."""
+"""Atomic file writes: a reader sees the old file or the whole new one, never half of it.
+
+A writer that is killed leaves its hidden temporary behind. Writers that put their process
+id into the temporary's name let the next writer there remove the leftovers of processes
+that no longer run (:func:`remove_dead_temporaries`), and never a live writer's.
+"""
 
 from __future__ import annotations
 
 import json
 import os
+import re
+import shutil
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -34,3 +41,38 @@ def atomic_json(path: str | os.PathLike, data: Any, *, sort_keys: bool = False) 
     """``data`` as indented JSON (and a final newline) at ``path``, atomically."""
     text = json.dumps(data, indent=2, sort_keys=sort_keys) + "\n"
     return atomic_write(path, lambda file: file.write(text), mode="w")
+
+
+def process_running(pid: int) -> bool:
+    """Whether the process ``pid`` runs (this process does; another user's counts as
+    running, since it cannot be asked)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_dead_temporaries(folder: str | os.PathLike, pattern: re.Pattern[str]) -> list[Path]:
+    """Remove the files and folders in ``folder`` whose whole name matches ``pattern`` and
+    whose process is not running; the paths removed. The process id is the first of
+    ``pattern``'s groups that matched."""
+    folder = Path(folder)
+    removed: list[Path] = []
+    if not folder.is_dir():
+        return removed
+    for candidate in folder.iterdir():
+        match = pattern.fullmatch(candidate.name)
+        pid = next((group for group in match.groups() if group), None) if match else None
+        if pid is None or process_running(int(pid)):
+            continue
+        if candidate.is_dir() and not candidate.is_symlink():
+            shutil.rmtree(candidate, ignore_errors=True)
+        else:
+            candidate.unlink(missing_ok=True)
+        removed.append(candidate)
+    return removed

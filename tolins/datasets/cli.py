@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tolins import cli_checks
+
+if TYPE_CHECKING:
+    from tolins.datasets.sources import Source
 
 _RECIPES = "expert-safe, expert-efficient, bc, random, mixed"
 _NAMED = {"safe": "expert-safe", "efficient": "expert-efficient"}
@@ -73,36 +76,52 @@ def _label(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tolins.datasets.sources import make_source, recipe_entries
-    from tolins.datasets.writer import check_target
-
-    prog = "tolins dataset"
     from tolins.datasets.reader import require_minari
 
+    prog = "tolins dataset"
     try:
         require_minari(prog)
     except ImportError as error:
         return cli_checks.fail(prog, error)
+    from tolins.datasets.target import check_target, claim_target
+
     try:
-        entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
         name = args.name or default_name(args.env, _label(args))
         cli_checks.output_folder("--out", args.out)
-        target = check_target(args.out, name)
-    except ValueError as error:
+        check_target(args.out, name)
+        sources = _sources(args)
+        with claim_target(args.out, name) as target:
+            successes = _write(args, sources, name)
+    except ValueError as error:  # OptionError too
         return cli_checks.fail(prog, error)
+    print(
+        f"wrote {target}: {args.episodes} episodes, {successes} successful; "
+        f"MINARI_DATASETS_PATH={args.out} minari.load_dataset({name!r})"
+    )
+    return 0
+
+
+def _sources(args: argparse.Namespace) -> list[Source]:
+    """The policies of ``--recipe`` or ``--policy`` (``ValueError`` for a bad one); none has
+    done any work yet."""
     import gymnasium as gym
+
+    from tolins.datasets.sources import make_source, recipe_entries
+
+    entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
+    socket = gym.spec(args.env).kwargs["socket"]
+    return [
+        make_source(e, socket, env_id=args.env, backend=args.backend, seed=args.seed)
+        for e in entries
+    ]
+
+
+def _write(args: argparse.Namespace, sources: list[Source], name: str) -> int:
+    """Write the dataset ``name`` with a progress bar; the number of successful episodes."""
     from tqdm import tqdm
 
     from tolins.datasets.writer import write_dataset
 
-    socket = gym.spec(args.env).kwargs["socket"]
-    try:
-        sources = [
-            make_source(e, socket, env_id=args.env, backend=args.backend, seed=args.seed)
-            for e in entries
-        ]
-    except ValueError as error:
-        return cli_checks.fail(prog, error)
     successes = 0
     with tqdm(total=args.episodes, desc=f"dataset {name}", unit="episode") as bar:
 
@@ -111,22 +130,14 @@ def _run(args: argparse.Namespace) -> int:
             successes += bool(record.buffer.infos["success"][-1])
             bar.update()
 
-        try:
-            write_dataset(
-                args.env,
-                sources,
-                args.episodes,
-                args.out,
-                name,
-                backend=args.backend,
-                seed=args.seed,
-                on_episode=advance,
-            )
-        except ValueError as error:
-            print(f"{prog}: {error}", file=sys.stderr)
-            return 2
-    print(
-        f"wrote {target}: {args.episodes} episodes, {successes} successful; "
-        f"MINARI_DATASETS_PATH={args.out} minari.load_dataset({name!r})"
-    )
-    return 0
+        write_dataset(
+            args.env,
+            sources,
+            args.episodes,
+            args.out,
+            name,
+            backend=args.backend,
+            seed=args.seed,
+            on_episode=advance,
+        )
+    return successes

@@ -4,13 +4,17 @@ A dataset is named by its folder (``ROOT/NAME``, or its ``data`` folder) or by i
 id under ``MINARI_DATASETS_PATH`` (``~/.minari/datasets`` by default). It is accepted for
 an env ``ENV`` when its env spec is ``ENV``, its observation and action spaces are
 ``ENV``'s, and, where it states them (``tolins_units``, written by ``tolins dataset``), its
-units are tolins's (mm, rad, N, N·mm; mm/s, rad/s). Anything else is refused with one line
+units are tolins's (mm, rad, N, N·mm; mm/s, rad/s). Its episodes are checked for what they
+hold before a learner sees them: readable, observations and actions as wide as the spaces
+(one observation more than actions), every value finite, every action inside the action box
+and every observation inside the observation box. Anything else is refused with one line
 saying what differs.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -61,9 +65,7 @@ def open_dataset(source: str | os.PathLike, env_id: str | None = None) -> Any:
     try:
         dataset = minari.MinariDataset(folder)
     except Exception as error:  # a corrupt or foreign folder: say so in one line
-        raise ValueError(
-            f"--demos {source}: unreadable ({type(error).__name__}: {error})"
-        ) from None
+        raise ValueError(f"--demos {source}: unreadable ({_reason(error)})") from None
     check_dataset(dataset, env_id, str(source))
     return dataset
 
@@ -109,7 +111,82 @@ def to_rollout(episode: Any) -> Rollout:
     )
 
 
+def check_episode(episode: Any, dataset: Any, label: str) -> None:
+    """Raise ``ValueError`` (naming the episode, the field and what is allowed) unless
+    ``episode`` holds what ``dataset``'s spaces allow (see the module docstring)."""
+    where = f"--demos {label}: episode {episode.id}"
+    observations = _field(episode.observations, "observations", dataset.observation_space, where)
+    actions = _field(episode.actions, "actions", dataset.action_space, where)
+    if len(observations) != len(actions) + 1:
+        raise ValueError(
+            f"{where}: {len(observations)} observations for {len(actions)} actions; "
+            "allowed: one observation more than actions"
+        )
+    rewards = np.asarray(episode.rewards, dtype=np.float64)
+    if not np.all(np.isfinite(rewards)):
+        raise ValueError(f"{where}: rewards hold {_first_bad(rewards)}; allowed: finite values")
+
+
+def _field(values: Any, field: str, space: gym.spaces.Box, where: str) -> np.ndarray:
+    """``values`` as an array of rows of ``space``'s width, checked finite and inside
+    ``space``'s box; ``ValueError`` naming ``field`` otherwise."""
+    if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
+        raise ValueError(f"{where}: {field} of the space {space}; allowed: a 1-D Box")
+    array = np.asarray(values, dtype=np.float64)
+    width = space.shape[0]
+    if array.ndim != 2 or array.shape[1] != width:
+        raise ValueError(
+            f"{where}: {field} of shape {array.shape}; allowed: rows of width {width} "
+            f"(the {field.removesuffix('s')} space's)"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{where}: {field} hold {_first_bad(array)}; allowed: finite values")
+    low, high = (np.broadcast_to(bound, array.shape) for bound in (space.low, space.high))
+    outside = (array < low) | (array > high)
+    if np.any(outside):
+        step, column = np.argwhere(outside)[0]
+        raise ValueError(
+            f"{where}: {field}[{step}, {column}] = {array[step, column]:g} is outside the "
+            f"{field.removesuffix('s')} space; allowed: {low[step, column]:g} … "
+            f"{high[step, column]:g}"
+        )
+    return array
+
+
+def _first_bad(array: np.ndarray) -> str:
+    """The first value of ``array`` that is not finite, with its index."""
+    index = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
+    return f"{array[index]} at {list(index)}"
+
+
+def _episodes(dataset: Any, label: str) -> Iterator[Any]:
+    """The episodes of ``dataset``, read from its file in turn; ``ValueError`` for a file
+    that cannot be read (truncated, empty, not hdf5)."""
+    episodes = iter(dataset.iterate_episodes())
+    while True:
+        try:
+            episode = next(episodes)
+        except StopIteration:
+            return
+        except Exception as error:  # h5py's and Minari's errors for a damaged file: one line
+            raise ValueError(
+                f"--demos {label}: its episodes are unreadable ({_reason(error)}); allowed: "
+                "a complete dataset file (write it again)"
+            ) from None
+        yield episode
+
+
+def _reason(error: Exception) -> str:
+    """``error`` as one line: its type and the first line of its message."""
+    return f"{type(error).__name__}: {error}".splitlines()[0]
+
+
 def load_demonstrations(source: str | os.PathLike, env_id: str | None = None) -> list[Rollout]:
-    """Every episode of the dataset ``source`` (checked by :func:`open_dataset`), in order."""
+    """Every episode of the dataset ``source`` (checked by :func:`open_dataset` and
+    :func:`check_episode`), in order. Raises ``ValueError`` naming what is wrong."""
     dataset = open_dataset(source, env_id)
-    return [to_rollout(episode) for episode in dataset.iterate_episodes()]
+    rollouts = []
+    for episode in _episodes(dataset, str(source)):
+        check_episode(episode, dataset, str(source))
+        rollouts.append(to_rollout(episode))
+    return rollouts

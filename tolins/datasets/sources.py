@@ -15,11 +15,13 @@ mixed              safe, efficient, bc, random in turn
 
 The ``bc`` policy is :func:`tolins.learning.runs.run_bc`'s π_bc with the default configs
 and the dataset's seed (50 safe-expert episodes, 200 epochs): the same policy as
-``tolins train bc --env ID --seed SEED --backend BACKEND``.
+``tolins train bc --env ID --seed SEED --backend BACKEND``. It is trained when its first
+episode starts, so that a dataset's options are all checked before that work.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -29,6 +31,12 @@ from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX
 
 Policy = Callable[[np.ndarray], np.ndarray]
+
+#: What ``--policy`` takes, for error messages.
+POLICY_FORMS = (
+    "--policy takes a .zip/.pt file path (or a `tolins train` --out folder), MODULE:NAME "
+    "(imports that module) or one of: safe, efficient, random, bc"
+)
 
 #: Recipe name -> the policy names dealt to its episodes in turn.
 RECIPES: dict[str, tuple[str, ...]] = {
@@ -70,20 +78,22 @@ def _bc_policy(env_id: str, backend: str, seed: int) -> Policy:
 
 
 def make_source(entry: str, socket: SocketSpec, *, env_id: str, backend: str, seed: int) -> Source:
-    """The policy ``entry``: ``random``, ``bc`` (see the module docstring), or anything
-    :func:`tolins.learning.actors.make_actor` takes (``safe``, ``efficient``, a policy
-    file, an SB3 ``.zip``, ``MODULE:NAME``). Raises ``ValueError`` for a bad entry."""
+    """The policy ``entry``: ``random``, ``bc`` (see the module docstring; trained on first
+    use), or anything :func:`tolins.learning.actors.make_actor` takes (``safe``,
+    ``efficient``, a policy file, an SB3 ``.zip``, ``MODULE:NAME``). Raises ``ValueError``
+    for a bad entry."""
     if entry == "random":
         return Source("random", RandomPolicy)
     if entry == "bc":
-        policy = _bc_policy(env_id, backend, seed)
-        return Source("bc", lambda _: policy)
+        trained = functools.cache(lambda: _bc_policy(env_id, backend, seed))
+        return Source("bc", lambda _: trained())
     from tolins.learning.actors import make_actor
 
     try:
         actor = make_actor(entry, socket)
-    except ValueError as error:  # name the dataset's own two policies too
-        raise ValueError(f"{error}; or random, bc (module tolins.datasets.sources)") from None
+    except ValueError as error:  # what was wrong, and every --policy form (random, bc too)
+        problem = str(error).partition("; allowed: ")[0]
+        raise ValueError(f"{problem}; {POLICY_FORMS}") from None
     return Source(entry, lambda _: actor)
 
 

@@ -14,10 +14,11 @@ simulator fault truncated it).
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
 import shutil
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +29,7 @@ import numpy as np
 
 from tolins.datasets.envspec import dataset_env_spec, socket_to_json
 from tolins.datasets.sources import Source
+from tolins.datasets.target import claim_target, temporary_folder
 from tolins.envs.episode import check_action
 
 #: The ``info`` keys stored per step (every key of the env's info but ``error``).
@@ -114,24 +116,6 @@ def record_episode(env: gym.Env, policy: Callable, seed: int, name: str, index: 
     return EpisodeRecord(buffer, metadata)
 
 
-def check_target(root: str | os.PathLike, name: str) -> Path:
-    """The folder ``ROOT/NAME`` a dataset would take; ``ValueError`` for a malformed Minari
-    id or a folder that exists (nothing is created)."""
-    from minari.dataset.minari_dataset import parse_dataset_id
-
-    try:
-        parse_dataset_id(name)
-    except ValueError:
-        raise ValueError(
-            f"--name {name!r} is not a Minari dataset id; allowed: (namespace/)name-vN, "
-            "e.g. tolins/circle2x2/expert-safe-v0"
-        ) from None
-    target = Path(root).resolve() / name
-    if target.exists():
-        raise ValueError(f"{target} exists; allowed: a new --name or --out (or remove it)")
-    return target
-
-
 def write_dataset(
     env_id: str,
     sources: Sequence[Source],
@@ -147,43 +131,55 @@ def write_dataset(
     stream: int = 0,
 ) -> Path:
     """Write ``episodes`` episodes of ``env_id`` on ``backend`` to ``ROOT/NAME`` (episode
-        ``i`` acts with ``sources[i % len(sources)]``, seeded by :func:`episode_seeds`).
-        ``env_kwargs`` go to the env (``socket=`` for ``tolins/Insert-v1``) and into its spec;
+    ``i`` acts with ``sources[i % len(sources)]``, seeded by :func:`episode_seeds`).
+    ``env_kwargs`` go to the env (``socket=`` for ``tolins/Insert-v1``) and into its spec;
     ``stream`` picks the seeds of a training's env number ``stream`` (:func:`episode_seeds`).
 
-        The dataset is built in a hidden folder beside its place and renamed onto it at the
-        end: on any error or Ctrl-C the hidden folder is removed and nothing is left.
+    The dataset is built in a hidden folder beside its place and renamed onto it at the
+    end: on any error or Ctrl-C the hidden folder is removed and nothing is left. While it
+    is built, its place is claimed (:func:`~tolins.datasets.target.claim_target`): a
+    second writer of ``ROOT/NAME`` gets ``ValueError`` at once.
     """
     from minari.dataset.minari_storage import MinariStorage
 
-    target = check_target(root, name)
     spec = dataset_env_spec(env_id, **(env_kwargs or {}), backend=backend)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    temp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
-    env = gym.make(spec)
-    try:
-        storage = MinariStorage.new(
-            temp / "data",
-            observation_space=env.observation_space,
-            action_space=env.action_space,
-            env_spec=spec,
-        )
-        for index, seed_i in enumerate(episode_seeds(seed, episodes, stream)):
-            source = sources[index % len(sources)]
-            record = record_episode(env, source.make(seed_i), seed_i, source.name, index)
-            storage.update_episodes([record.buffer])
-            storage.update_episode_metadata([record.metadata], [index])
-            if on_episode is not None:
-                on_episode(record)
-        metadata = _metadata(name, env_id, backend, seed, sources, description)
-        storage.update_metadata({**metadata, "tolins_stream": int(stream)})
-        os.rename(temp, target)
-    except BaseException:
-        shutil.rmtree(temp, ignore_errors=True)
-        raise
-    finally:
-        env.close()
+    with claim_target(root, name) as target, contextlib.closing(gym.make(spec)) as env:
+        temp = temporary_folder(target)
+        try:
+            storage = MinariStorage.new(
+                temp / "data",
+                observation_space=env.observation_space,
+                action_space=env.action_space,
+                env_spec=spec,
+            )
+            for index, seed_i in enumerate(episode_seeds(seed, episodes, stream)):
+                source = sources[index % len(sources)]
+                record = record_episode(env, source.make(seed_i), seed_i, source.name, index)
+                storage.update_episodes([record.buffer])
+                storage.update_episode_metadata([record.metadata], [index])
+                if on_episode is not None:
+                    on_episode(record)
+            metadata = _metadata(name, env_id, backend, seed, sources, description)
+            storage.update_metadata({**metadata, "tolins_stream": int(stream)})
+            _move_into_place(temp, target)
+        except BaseException:
+            shutil.rmtree(temp, ignore_errors=True)
+            raise
     return target
+
+
+def _move_into_place(temp: Path, target: Path) -> None:
+    """Rename the finished folder ``temp`` onto ``target``; ``ValueError`` if a dataset
+    has appeared there meanwhile (written by a writer that holds no claim)."""
+    try:
+        os.rename(temp, target)
+    except OSError as error:
+        if error.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+            raise
+        raise ValueError(
+            f"{target} was written by another process meanwhile; allowed: a new --name or "
+            "--out (or remove it)"
+        ) from None
 
 
 def _metadata(name, env_id, backend, seed, sources, description) -> dict[str, Any]:

@@ -1,0 +1,124 @@
+"""Where a dataset goes: ``ROOT/NAME``, claimed by one writer at a time.
+
+A dataset id is Minari's ``(namespace/)name-vN``, the version included. While a writer
+builds ``ROOT/NAME`` it holds an exclusive lock on the hidden file ``.NAME.lock`` beside it
+(``fcntl.flock``: the kernel drops it when the process ends, however it ends), so a second
+writer of the same dataset is refused at once, before any work. The dataset is built in the
+hidden folder ``.NAME.PID.RANDOM.tmp`` beside its place; the next writer of that dataset
+removes the ones of processes that no longer run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import re
+import tempfile
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+from tolins import atomic
+
+#: The dataset ids allowed, in words (what :func:`check_name` accepts).
+ID_FORM = (
+    "(namespace/)name-vN of letters, digits, '-' and '_' (a namespace of 2 or more "
+    "characters, a version N of digits), e.g. tolins/circle2x2/expert-safe-v0"
+)
+
+#: The lock files this process holds, each with the thread that holds it.
+_HELD: dict[Path, int] = {}
+
+
+def check_name(name: str) -> None:
+    """Raise ``ValueError`` naming ``name`` and :data:`ID_FORM` unless it is a Minari dataset
+    id with a version."""
+    from minari.dataset.minari_dataset import parse_dataset_id
+
+    try:
+        version = parse_dataset_id(name)[2]
+    except (ValueError, TypeError):  # TypeError: Minari's parse of an id without a version
+        version = None
+    if not isinstance(version, int):
+        raise ValueError(f"--name {name!r} is not a Minari dataset id; allowed: {ID_FORM}")
+
+
+def check_target(root: str | os.PathLike, name: str) -> Path:
+    """The folder ``ROOT/NAME`` a dataset would take; ``ValueError`` for a malformed Minari
+    id or a folder that exists (nothing is created)."""
+    check_name(name)
+    target = Path(root).resolve() / name
+    if target.exists():
+        raise ValueError(f"{target} exists; allowed: a new --name or --out (or remove it)")
+    for folder in target.parents:
+        if folder.exists() and not folder.is_dir():
+            raise ValueError(f"--name {name!r}: {folder} is a file; allowed: a path of folders")
+    return target
+
+
+@contextlib.contextmanager
+def claim_target(root: str | os.PathLike, name: str) -> Iterator[Path]:
+    """Hold the lock of ``ROOT/NAME`` for the block (creating the folders above it); the
+    target. ``ValueError`` for a bad target (:func:`check_target`) or one that another
+    process (or thread) is writing. Nested claims of one thread share the lock."""
+    target = check_target(root, name)
+    lock = target.parent / f".{target.name}.lock"
+    if _HELD.get(lock) == threading.get_ident():
+        yield target
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd = _lock(lock, target)
+    _HELD[lock] = threading.get_ident()
+    try:
+        yield check_target(root, name)  # the writer before may have finished meanwhile
+    finally:
+        del _HELD[lock]
+        lock.unlink(missing_ok=True)
+        os.close(fd)  # releases the lock
+
+
+def _lock(lock: Path, target: Path) -> int:
+    """A descriptor of the file ``lock``, locked exclusively; ``ValueError`` naming the
+    holder when another descriptor holds it."""
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 100, 0).decode(errors="replace").strip() or "another process"
+            os.close(fd)
+            raise ValueError(
+                f"{target} is being written by {holder}; allowed: wait for it to finish, "
+                "or a new --name or --out"
+            ) from None
+        if _same_file(fd, lock):  # not a file its holder removed as it finished
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"process {os.getpid()}\n".encode(), 0)
+            return fd
+        os.close(fd)
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether the open file ``fd`` is the file at ``path`` now."""
+    try:
+        return os.path.samestat(os.fstat(fd), os.stat(path))
+    except FileNotFoundError:
+        return False
+
+
+def temporary_folder(target: Path) -> Path:
+    """A new hidden folder ``.NAME.PID.RANDOM.tmp`` beside ``target`` (readable by all, as
+    the dataset it becomes), after removing those of processes that no longer run."""
+    remove_dead_temporaries(target)
+    prefix = f".{target.name}.{os.getpid()}."
+    temp = tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=target.parent)
+    os.chmod(temp, 0o755)  # mkdtemp makes it 0700; keep a folder's usual permissions
+    return Path(temp)
+
+
+def remove_dead_temporaries(target: Path) -> list[Path]:
+    """Remove the temporary folders of ``target`` (:func:`temporary_folder`) whose process
+    is not running; the paths removed."""
+    pattern = re.compile(rf"\.{re.escape(target.name)}\.(\d+)\.[a-z0-9_]+\.tmp")
+    return atomic.remove_dead_temporaries(target.parent, pattern)

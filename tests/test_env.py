@@ -198,12 +198,12 @@ def test_rgb_array_render_shows_the_parts(backend: str) -> None:
     try:
         image = env.render()
     except Exception as error:  # no OpenGL (EGL) on this machine
-        pytest.skip(f"headless OpenGL unavailable: {error}")
-    finally:
         env.close()
+        pytest.skip(f"headless OpenGL unavailable: {error}")
+    drawn_x = env.backend.data.qpos[env.backend.model.joint("x").qposadr[0]]
+    env.close()  # releases the backend: read the drawn pose before
     assert image.shape == (480, 640, 3) and image.dtype == np.uint8
     board_green = (image[..., 1] > image[..., 0] + 30) & (image[..., 1] > image[..., 2] + 30)
     pin_gold = (image[..., 0] > 150) & (image[..., 2] < 100)
     assert board_green.mean() > 0.1 and pin_gold.sum() > 200
-    drawn_x = env.backend.data.qpos[env.backend.model.joint("x").qposadr[0]]
     assert drawn_x == 0.8  # the drawing model shows the backend's pose

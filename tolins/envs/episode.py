@@ -6,7 +6,8 @@ so the two APIs cannot drift apart.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Iterable
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import gymnasium as gym
@@ -207,6 +208,23 @@ class TaskSettings:
         """``[x̂−x*, ŷ−y*, θ̂−θ*, ẑ, F̂x, F̂y, q̂θ, F̂z]`` with the measurement noise."""
         exact = np.concatenate([state.pose[:3] - goal, state.pose[3:], state.wrench])
         return exact + rng.normal(0.0, 1.0, 8) * self._noise_std
+
+
+#: The keywords of :class:`TaskSettings` an env takes besides its socket.
+TASK_KEYWORDS = tuple(f.name for f in fields(TaskSettings) if f.init and f.name != "socket")
+
+
+def check_keywords(owner: str, given: dict[str, Any], allowed: Iterable[str]) -> None:
+    """``ValueError`` naming the keywords of ``given`` that ``owner`` does not take, with the
+    ones it takes (not their values: a socket or a distribution prints long)."""
+    allowed = sorted(allowed)
+    unknown = sorted(set(given) - set(allowed))
+    if unknown:
+        names = ", ".join(map(repr, unknown))
+        plural = "s" if len(unknown) > 1 else ""
+        raise ValueError(
+            f"{owner} got unknown keyword{plural} {names}; allowed: {', '.join(allowed)}"
+        )
 
 
 def check_action(action: Any) -> np.ndarray:

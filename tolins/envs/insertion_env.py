@@ -8,17 +8,19 @@ import gymnasium as gym
 import numpy as np
 
 from tolins.envs.backend import Backend
-from tolins.envs.episode import TaskSettings, check_action
+from tolins.envs.episode import TASK_KEYWORDS, TaskSettings, check_action, check_keywords
 from tolins.envs.episode_state import EpisodeState
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.kinematic_backend import KinematicBackend
 from tolins.envs.mujoco_backend import MujocoBackend
-from tolins.envs.rendering import open_renderer
+from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 
 #: Simulators by name: ``factory(spec, control_dt) -> Backend``.
 BACKENDS = {"mujoco": MujocoBackend, "kinematic": KinematicBackend}
+#: Every keyword ``InsertionEnv`` takes.
+ENV_KEYWORDS = ("socket", "backend", "goal", "render_mode", *TASK_KEYWORDS)
 
 
 def _setting(name: str) -> property:
@@ -136,6 +138,12 @@ class InsertionEnv(gym.Env):
     ``reward_collision``, ``reward_approach``, ``reward_height``, ``reward_alignment``,
     ``reward_depth``, ``reward_offset``, and ``error`` after a fault.
 
+    **Closing**: ``close()`` releases the simulation and the renderer; a later ``reset``,
+    ``step`` or ``render`` raises ``gymnasium.error.ClosedEnvironmentError`` (closing twice
+    is harmless). ``step`` before the first ``reset`` raises ``gymnasium.error.ResetNeeded``,
+    as gymnasium's ``OrderEnforcing`` does. A keyword the env does not take raises
+    ``ValueError`` naming it and the allowed ones.
+
     Version history:
 
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
@@ -174,7 +182,9 @@ class InsertionEnv(gym.Env):
         randomization: Any = None,
         render_mode: str | None = None,
         defects: Any = None,
+        **unknown: Any,
     ) -> None:
+        check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
         if backend not in BACKENDS:
             raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
         if render_mode not in (None, *self.metadata["render_modes"]):
@@ -198,9 +208,10 @@ class InsertionEnv(gym.Env):
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
-        self.backend: Backend = BACKENDS[backend](socket, self.control_dt)
+        self.backend: Backend | None = BACKENDS[backend](socket, self.control_dt)
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
+        self._closed = False
 
     nominal_socket = _setting("socket")
     measurement_noise = _setting("measurement_noise")
@@ -232,33 +243,57 @@ class InsertionEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        self._check_open()
         super().reset(seed=seed)
         plan = self._episode.plan(self.np_random, options)
         if plan.socket is not self.backend.spec:
             self.backend = BACKENDS[self.backend_name](plan.socket, self.control_dt)
-            self.close()
+            self._close_renderer()  # it draws the previous workpiece's model
         if self.settings.randomization is not None and isinstance(self.backend, MujocoBackend):
             self.backend.set_physics(plan.physics)
         return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        self._check_open()
         self._episode.check_running()
         state = self.backend.step(check_action(action))
         return self._episode.advance(state, self.np_random)
 
     def render(self) -> np.ndarray | None:
+        """The ``rgb_array`` frame ``(480, 640, 3)`` of the current state, or ``None`` without
+        ``render_mode="rgb_array"``."""
+        self._check_open()
         if self.render_mode != "rgb_array":
             return None
         if self._renderer is None:
-            self._renderer = open_renderer(self.backend.model, 480, 640)
-        self._renderer.update_scene(self.backend.data, camera="overview")
-        return self._renderer.render()
+            self._renderer = open_renderer(self.backend.model, *FRAME_SIZE)
+        return draw_frame(self._renderer, self.backend.data)
 
     def __getstate__(self) -> dict[str, Any]:
         # The renderer holds an OpenGL context, which cannot be copied; render() makes anew.
         return {**self.__dict__, "_renderer": None}
 
     def close(self) -> None:
+        """Release the simulation (model and data) and the renderer. A later ``reset``,
+        ``step`` or ``render`` raises ``gymnasium.error.ClosedEnvironmentError``; closing
+        again does nothing."""
+        self._close_renderer()
+        self.backend = None
+        self._closed = True
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has released the simulation."""
+        return self._closed
+
+    def _check_open(self) -> None:
+        """``gymnasium.error.ClosedEnvironmentError`` once the env is closed."""
+        if self._closed:
+            raise gym.error.ClosedEnvironmentError(
+                "this InsertionEnv is closed: close() released its simulation; make a new env"
+            )
+
+    def _close_renderer(self) -> None:
         if self._renderer is not None:
-            self._renderer.close()
+            close_renderer(self._renderer)
             self._renderer = None

@@ -181,6 +181,15 @@ def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
 _ONE = np.zeros(1, dtype=np.intp)  # the batch row of a single backend
 
 
+def posed_data(model: mujoco.MjModel, data: mujoco.MjData, pose: np.ndarray) -> mujoco.MjData:
+    """``data`` of ``model`` (made by :func:`tolins.make_mjcf`) with the workpiece's joints at
+    ``pose`` ``[x, y, theta, z]`` and forward kinematics run: the drawing of a kinematic pose."""
+    for value, joint in zip(pose, ("x", "y", "theta", "z"), strict=True):
+        data.qpos[model.joint(joint).qposadr[0]] = value
+    mujoco.mj_forward(model, data)
+    return data
+
+
 class KinematicBackend:
     """One workpiece with the kinematic model, behind the :class:`Backend` protocol.
 
@@ -212,8 +221,4 @@ class KinematicBackend:
     @property
     def data(self) -> mujoco.MjData:
         """MuJoCo data posed at the current pose (forward kinematics only)."""
-        model = self.model
-        for value, joint in zip(self._batch.pose[0], ("x", "y", "theta", "z"), strict=True):
-            self._data.qpos[model.joint(joint).qposadr[0]] = value
-        mujoco.mj_forward(model, self._data)
-        return self._data
+        return posed_data(self.model, self._data, self._batch.pose[0])

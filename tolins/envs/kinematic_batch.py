@@ -10,13 +10,15 @@ independent: each is the single env's step bit for bit.
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from tolins.envs.batch import BatchState
 from tolins.envs.episode import check_control_dt
-from tolins.envs.kinematic_backend import CONTACT_FORCE, colliding, kinematic_step
+from tolins.envs.kinematic_backend import CONTACT_FORCE, colliding, kinematic_step, posed_data
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
+from tolins.mjcf import make_mjcf
 
 
 class KinematicBatch:
@@ -33,6 +35,8 @@ class KinematicBatch:
         self.control_dt = check_control_dt(control_dt)
         self._sockets: list[SocketSpec] = [socket] * self.num_envs
         self._pose = np.zeros((self.num_envs, 4))
+        # MuJoCo models of the workpieces drawn so far, by identity of their socket.
+        self._drawings: dict[int, tuple[SocketSpec, mujoco.MjModel, mujoco.MjData]] = {}
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         self._sockets[index] = socket
@@ -78,5 +82,20 @@ class KinematicBatch:
             peak[rows] = np.where(collided, CONTACT_FORCE, 0.0)
         return BatchState(self._pose[ids], wrench, peak)
 
+    def drawing(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Workpiece ``index``'s MuJoCo model and a data posed at its pose (forward
+        kinematics only), as the single env's ``KinematicBackend.data`` draws it. The data
+        is shared by the workpieces of one socket: draw it before asking for the next."""
+        socket = self._sockets[index]
+        entry = self._drawings.get(id(socket))
+        if entry is None or entry[0] is not socket:
+            model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
+            if len(self._drawings) >= 2 * self.num_envs:  # the oldest are no longer drawn
+                self._drawings.pop(next(iter(self._drawings)))
+            entry = self._drawings[id(socket)] = (socket, model, mujoco.MjData(model))
+        _, model, data = entry
+        return model, posed_data(model, data, self._pose[index].copy())
+
     def close(self) -> None:
-        """Nothing to release."""
+        """Release the drawing models (the poses are plain arrays)."""
+        self._drawings.clear()

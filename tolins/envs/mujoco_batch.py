@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import os
+from numbers import Integral
 
 import mujoco
 import mujoco.batch
@@ -50,6 +51,23 @@ def default_threads() -> int:
         return os.cpu_count() or 1
 
 
+def max_threads() -> int:
+    """The most threads a batch may run: the machine's cores."""
+    return os.cpu_count() or default_threads()
+
+
+def check_threads(num_threads: object) -> int:
+    """``num_threads`` as an int if it is 1 … :func:`max_threads` (more threads than cores
+    only contend for them)."""
+    most = max_threads()
+    allowed = f"1 ≤ num_threads ≤ {most} (this machine's cores), or None for {default_threads()}"
+    if isinstance(num_threads, bool) or not isinstance(num_threads, Integral):
+        raise ValueError(f"num_threads={num_threads!r} is not an integer; allowed: {allowed}")
+    if not 1 <= num_threads <= most:
+        raise ValueError(f"num_threads={num_threads!r} is out of range; allowed: {allowed}")
+    return int(num_threads)
+
+
 def _sequential_sum(columns: np.ndarray) -> np.ndarray:
     """Row sums of ``columns`` ``(n, k)`` added left to right, as Python's ``sum`` of a row
     (numpy's pairwise sum rounds differently from 8 columns on)."""
@@ -66,10 +84,12 @@ class MujocoBatch:
         socket: The nominal socket; every simulation starts with it.
         num_envs: Number of simulations.
         control_dt: Control period (s), as the single env's.
-        num_threads: Threads of the batch (including the caller's); default: every core.
+        num_threads: Threads of the batch (including the caller's), at most the machine's
+            cores (:func:`max_threads`); default: the cores this process may run on.
         contact_checks: Contact-force reads per control step; default as the single env.
         persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``), so
-            that :meth:`pin_touch_points` can read a simulation's contacts.
+            that :meth:`pin_touch_points` can read a simulation's contacts and
+            :meth:`drawing` its whole data.
     """
 
     def __init__(
@@ -83,7 +103,7 @@ class MujocoBatch:
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = default_threads() if num_threads is None else num_threads
-        self.num_threads = check_int("num_threads", threads, minimum=1)
+        self.num_threads = check_threads(threads)
         self.socket = socket
         self.model = mujoco.MjModel.from_xml_string(make_mjcf(socket))
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
@@ -107,6 +127,7 @@ class MujocoBatch:
         self._force = slice(force, force + 3)
         self._torque_z = self.model.sensor("torque").adr[0] + 2
         self._pin_geoms = pin_geom_ids(self.model)
+        self._drawing: mujoco.MjData | None = None
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
@@ -218,5 +239,19 @@ class MujocoBatch:
         mujoco.mj_forward(model, data)
         return model, data
 
+    def drawing(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Simulation ``index``'s model and its whole data as its last call left it (a
+        persistent batch only): what the single env's ``MujocoBackend`` holds after the same
+        calls, for drawing. The data is shared: draw it before asking for the next."""
+        if not self.batch.persistent:
+            raise RuntimeError("drawing needs MujocoBatch(..., persistent=True)")
+        if self._drawing is None:
+            self._drawing = mujoco.MjData(self.model)
+        return self._models[index], self.batch.get_data(index, self._drawing)
+
     def close(self) -> None:
-        """Nothing to release: the batch's threads end with it."""
+        """Release the simulations: the batch (its threads end with it), the arrays bound to
+        it and the compiled models. The batch is not used afterwards."""
+        self.batch = None
+        self._qpos = self._qvel = self._act = self._ctrl = self._sensordata = None
+        self._models, self._compiled, self._drawing = [], {}, None

@@ -91,7 +91,7 @@ class PhysicsRandomization:
         ``"default"`` (:data:`DEFAULT_RANDOMIZATION`)."""
         if value is None or isinstance(value, cls):
             return value
-        if value == "default":
+        if isinstance(value, str) and value == "default":  # not an array's elementwise ==
             return DEFAULT_RANDOMIZATION
         if isinstance(value, dict):
             unknown = set(value) - {f.name for f in fields(cls)}

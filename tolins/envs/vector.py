@@ -7,22 +7,28 @@ one batched simulator (:mod:`tolins.envs.mujoco_batch` on ``mujoco.batch``'s thr
 :class:`~tolins.envs.episode_state.EpisodeState` per env, which does what ``InsertionEnv``
 does with its own random generator (noise, reward, success, defect draws). Env ``i`` reset
 with seed ``s`` runs the episodes of ``gymnasium.make(id)`` reset with seed ``s``, bit for
-bit (tested), at any thread count.
+bit (tested), at any thread count. It answers gymnasium's vector API as ``SyncVectorEnv``
+of single envs does (``call``, ``get_attr``, ``set_attr``, ``render``; per-env attributes
+in :mod:`tolins.envs.vector_views`).
 """
 
 from __future__ import annotations
 
+from numbers import Integral
 from typing import Any, ClassVar
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from tolins.envs.batch import BatchPhysics
-from tolins.envs.episode import TaskSettings, check_action
-from tolins.envs.episode_state import EpisodeState
+from tolins.envs.episode import TASK_KEYWORDS, TaskSettings, check_action, check_keywords
+from tolins.envs.episode_state import RESET_OPTIONS, EpisodeState
+from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
+from tolins.envs.vector_views import EnvView, check_name, check_value
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.paper import A_MAX
@@ -30,6 +36,20 @@ from tolins.paper import A_MAX
 #: Batched simulators by name (``warp`` needs ``pip install 'tolins[warp]'``).
 BATCH_BACKENDS = ("mujoco", "kinematic", "warp")
 _AUTORESET = {mode.value: mode for mode in AutoresetMode}
+#: Every keyword ``InsertionVectorEnv`` takes.
+VECTOR_KEYWORDS = (
+    "num_envs",
+    "socket",
+    "backend",
+    "num_threads",
+    "device",
+    "autoreset_mode",
+    "goal",
+    "render_mode",
+    *TASK_KEYWORDS,
+)
+#: The backends whose simulations can be drawn (``render_mode="rgb_array"``).
+DRAWABLE_BACKENDS = ("mujoco", "kinematic")
 
 
 def make_batch_physics(
@@ -39,8 +59,10 @@ def make_batch_physics(
     control_dt: float,
     num_threads: int | None = None,
     device: str | None = None,
+    persistent: bool = False,
 ) -> BatchPhysics:
-    """The batched simulator ``backend`` of ``num_envs`` copies of ``socket``."""
+    """The batched simulator ``backend`` of ``num_envs`` copies of ``socket`` (``persistent``:
+    MuJoCo's keeps every simulation's whole ``MjData``, for drawing)."""
     if backend not in BATCH_BACKENDS:
         raise ValueError(f"backend={backend!r}; allowed: {', '.join(map(repr, BATCH_BACKENDS))}")
     if device is not None and backend != "warp":
@@ -48,7 +70,7 @@ def make_batch_physics(
     if backend == "mujoco":
         from tolins.envs.mujoco_batch import MujocoBatch
 
-        return MujocoBatch(socket, num_envs, control_dt, num_threads)
+        return MujocoBatch(socket, num_envs, control_dt, num_threads, persistent=persistent)
     if backend == "kinematic":
         from tolins.envs.kinematic_batch import KinematicBatch
 
@@ -96,15 +118,46 @@ def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
     return out
 
 
+def _is_int(value: object) -> bool:
+    """Whether ``value`` is an integer (Python's or numpy's), not a bool."""
+    return isinstance(value, Integral) and not isinstance(value, (bool, np.bool_))
+
+
 def _per_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
-    """Gymnasium's rule: an int seeds env ``i`` with ``seed + i``; a list gives each its own."""
+    """Gymnasium's rule: an int seeds env ``i`` with ``seed + i``; a list gives each its own.
+    Seeds are integers ≥ 0 (numpy's as well, returned as Python ints)."""
+    allowed = f"None, an int ≥ 0, or a list of {n} ints ≥ 0 or None"
     if seed is None:
         return [None] * n
-    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+    if _is_int(seed) and seed >= 0:
         return [int(seed) + i for i in range(n)]
-    if isinstance(seed, (list, tuple)) and len(seed) == n:
-        return list(seed)
-    raise ValueError(f"seed={seed!r}; allowed: None, an int, or a list of {n} ints or None")
+    if not isinstance(seed, (list, tuple)) or len(seed) != n:
+        raise ValueError(f"seed={seed!r}; allowed: {allowed}")
+    for i, value in enumerate(seed):
+        if value is not None and not (_is_int(value) and value >= 0):
+            raise ValueError(f"seed[{i}]={value!r} is not a seed; allowed: {allowed}")
+    return [None if value is None else int(value) for value in seed]
+
+
+def _check_options(options: object) -> dict[str, Any]:
+    """A copy of ``options`` if it is ``None`` or a dict (its keys are checked later)."""
+    if options is None:
+        return {}
+    if not isinstance(options, dict):
+        keys = ", ".join(map(repr, (*RESET_OPTIONS, "reset_mask")))
+        raise ValueError(f"options={options!r}; allowed: None or a dict with keys {keys}")
+    return dict(options)
+
+
+def check_actions_shape(actions: Any, num_envs: int, allowed: str) -> None:
+    """``ValueError`` naming ``actions``' shape unless it is ``(num_envs, 4)`` (a ragged list
+    included); ``allowed`` says what a row is."""
+    try:
+        shape: Any = np.shape(actions)
+    except ValueError:  # rows of different lengths
+        shape = "ragged (rows of different lengths)"
+    if shape != (num_envs, 4):
+        raise ValueError(f"actions have shape {shape}; allowed: ({num_envs}, 4), {allowed}")
 
 
 class InsertionVectorEnv(gym.vector.VectorEnv):
@@ -114,32 +167,52 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         num_envs: Number of envs.
         socket: The socket, as ``InsertionEnv``'s (the ids' presets pass theirs).
         backend: ``"mujoco"`` (``mujoco.batch``), ``"kinematic"`` or ``"warp"``.
-        num_threads: Threads of the MuJoCo batch; default: every core of the machine.
+        num_threads: Threads of the MuJoCo batch, at most the machine's cores; default: the
+            cores this process may run on.
         device: Warp's device (``"cpu"``, ``"cuda:0"``), for ``backend="warp"`` only.
         autoreset_mode: ``"NextStep"`` (gymnasium's default: an env that ended is reset by
             the next ``step``, which returns its first observation, reward 0 and the reset's
             info) or ``"SameStep"`` (reset within the step that ends it; that step's last
             observation and info are in ``info["final_obs"]`` / ``info["final_info"]``) or
-            ``"Disabled"`` (no autoreset: an env whose episode has ended, or that was never
-            reset, is not stepped — its row repeats its last observation with reward 0 and
-            no ``info`` — until ``reset(options={"reset_mask": mask})`` resets it).
+            ``"Disabled"`` (no autoreset: an env whose episode has ended, or that a masked
+            reset has not reset yet, is not stepped — its row repeats its last observation
+            with reward 0 and no ``info`` — until ``reset(options={"reset_mask": mask})``
+            resets it).
         goal: The goal of every env, as ``InsertionEnv``'s.
+        render_mode: ``None`` or ``"rgb_array"`` (``render()``: one frame per env, each the
+            single env's frame of the same state; not on ``backend="warp"``).
         **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
             ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
             ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``,
-            ``randomization``, ``defects``).
+            ``randomization``, ``defects``); any other keyword raises ``ValueError`` naming
+            it and the allowed ones.
 
     ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
     masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
-    each with its own; options (``pose``, ``goal``) apply to every env reset by that call,
-    ``options["reset_mask"]`` (a bool per env, gymnasium's) resets only those envs. A
-    reset or step that raises changes nothing; after a failed reset every step raises
-    ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+    each with its own (Python or numpy integers); options (``pose``, ``goal``) apply to
+    every env reset by that call, ``options["reset_mask"]`` (a bool per env, gymnasium's)
+    resets only those envs. A reset or step that raises changes nothing; after a failed
+    reset every step raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+    ``step`` before the first ``reset`` raises ``ResetNeeded`` in every autoreset mode, as
+    the single env does. ``close()`` releases the batch and the renderers; a later
+    ``reset``, ``step`` or ``render`` raises ``gymnasium.error.ClosedEnvironmentError``.
+
+    **Vector API** (``SyncVectorEnv``'s semantics, as if each env were an ``InsertionEnv``):
+    ``call(name, *args, **kwargs)`` gives a tuple with env ``i``'s attribute ``name``, called
+    with the arguments if it is a method; ``get_attr(name)`` is ``call(name)``;
+    ``set_attr(name, values)`` sets env ``i``'s attribute to ``values[i]`` (a list or tuple
+    of ``num_envs``) or every env's to ``values`` (anything else: a goal for every env is
+    an array, since a list is per env); ``render()`` is ``call("render")``. The per-env
+    attributes: ``socket`` (env ``i``'s workpiece), ``goal`` and ``np_random`` (settable),
+    ``np_random_seed``, ``render``, the task's settings (``nominal_socket``, ``horizon``,
+    …, the same for every env), the single env's spaces, ``render_mode`` and ``metadata``
+    (table in :mod:`tolins.envs.vector_views`). Any other name raises ``AttributeError``.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
         "autoreset_mode": AutoresetMode.NEXT_STEP,
-        "render_modes": [],
+        "render_modes": ["rgb_array"],
+        "render_fps": 4,
     }
 
     def __init__(
@@ -155,10 +228,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         render_mode: str | None = None,
         **task: Any,
     ) -> None:
+        check_keywords("InsertionVectorEnv", task, VECTOR_KEYWORDS)
         if socket is None:
             raise ValueError("socket is required; allowed: a CircularSocket or PolygonSocket")
-        if render_mode is not None:
-            raise ValueError(f"render_mode={render_mode!r}; allowed: None (render one env)")
+        _check_render_mode(render_mode, backend)
         mode = getattr(autoreset_mode, "value", autoreset_mode)
         if mode not in _AUTORESET:
             raise ValueError(f"autoreset_mode={autoreset_mode!r}; allowed: {sorted(_AUTORESET)}")
@@ -166,9 +239,15 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.settings = TaskSettings(socket, **task)
         self.backend_name = backend
         self.metadata = {**self.metadata, "autoreset_mode": _AUTORESET[mode]}
-        self.render_mode = None
-        self.physics = make_batch_physics(
-            backend, socket, self.num_envs, self.settings.control_dt, num_threads, device
+        self.render_mode = render_mode
+        self.physics: BatchPhysics | None = make_batch_physics(
+            backend,
+            socket,
+            self.num_envs,
+            self.settings.control_dt,
+            num_threads,
+            device,
+            persistent=render_mode is not None,
         )
         if self.settings.randomization is not None and not hasattr(self.physics, "set_physics"):
             raise ValueError(f"randomization is not supported on backend={backend!r}")
@@ -184,8 +263,13 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.episodes = [EpisodeState(self.settings, goal) for _ in range(self.num_envs)]
-        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        #: Each env's random generator and the seed it was made from (``None``: not yet).
+        self.env_rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self.env_seeds: list[int | None] = [None] * self.num_envs
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._views = [EnvView(self, i) for i in range(self.num_envs)]
+        # Renderers by identity of the model they draw, the least recently drawn first.
+        self._renderers: dict[int, tuple[mujoco.MjModel, mujoco.Renderer]] = {}
 
     @property
     def sockets(self) -> list[SocketSpec]:
@@ -198,8 +282,9 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         seed: int | list[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        self._check_open()
         seeds = _per_env_seeds(seed, self.num_envs)
-        options = dict(options or {})
+        options = _check_options(options)
         mask = np.ones(self.num_envs, dtype=bool)
         if "reset_mask" in options:
             mask = np.asarray(options.pop("reset_mask"))
@@ -212,10 +297,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
         ids = np.flatnonzero(mask)
         for i in ids:
-            if seeds[i] is not None or self._rngs[i] is None:
-                self._rngs[i] = seeding.np_random(seeds[i])[0]
+            if seeds[i] is not None or self.env_rngs[i] is None:
+                self.env_rngs[i], self.env_seeds[i] = seeding.np_random(seeds[i])
         try:
-            plans = [self.episodes[i].plan(self._rngs[i], options) for i in ids]
+            plans = [self.episodes[i].plan(self.env_rngs[i], options) for i in ids]
         except Exception:
             for i in ids:
                 self.episodes[i].broken = True
@@ -233,12 +318,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
     def step(
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        shape = np.shape(actions)
-        if shape != (self.num_envs, 4):
-            raise ValueError(
-                f"actions have shape {shape}; allowed: ({self.num_envs}, 4), one "
-                "[ux, uy, utheta, uz] per env"
-            )
+        self._check_open()
+        if all(episode.state is None for episode in self.episodes):
+            raise gym.error.ResetNeeded("step() called before reset()")
+        check_actions_shape(actions, self.num_envs, "one [ux, uy, utheta, uz] per env")
         mode = self.metadata["autoreset_mode"]
         same_step = mode == AutoresetMode.SAME_STEP
         if mode == AutoresetMode.DISABLED:
@@ -258,7 +341,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             state = self.physics.step(running, velocities)
             for k, i in enumerate(running.tolist()):
                 obs, reward, terminated, truncated, info = self.episodes[i].advance(
-                    state.row(k), self._rngs[i]
+                    state.row(k), self.env_rngs[i]
                 )
                 observations[i], rewards[i] = obs, reward
                 terminations[i], truncations[i] = terminated, truncated
@@ -269,7 +352,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             resetting = np.zeros(self.num_envs, bool)
         if resetting.any():
             ids = np.flatnonzero(resetting)
-            plans = [self.episodes[i].plan(self._rngs[i], None) for i in ids]
+            plans = [self.episodes[i].plan(self.env_rngs[i], None) for i in ids]
             reset_observations, reset_infos = self._begin(ids, plans)
             for i, info in zip(ids.tolist(), reset_infos, strict=True):
                 if same_step:  # gymnasium's: the step's last observation and info aside
@@ -290,9 +373,91 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
-            observations[i], info = self.episodes[i].begin(plan, state.row(k), self._rngs[i])
+            observations[i], info = self.episodes[i].begin(plan, state.row(k), self.env_rngs[i])
             infos.append(info)
         return observations, infos
 
+    def render(self) -> tuple[np.ndarray | None, ...]:
+        """Each env's frame (``render_env``), as ``SyncVectorEnv.render`` gives its envs'."""
+        return self.call("render")
+
+    def render_env(self, index: int) -> np.ndarray | None:
+        """Env ``index``'s ``rgb_array`` frame ``(480, 640, 3)``, the single env's of the same
+        state; ``None`` without ``render_mode="rgb_array"``. ``ResetNeeded`` before the env's
+        first reset, as gymnasium's ``OrderEnforcing``."""
+        self._check_open()
+        if self.episodes[index].state is None:
+            raise gym.error.ResetNeeded(f"render() of env {index} called before its reset()")
+        if self.render_mode is None:
+            return None
+        model, data = self.physics.drawing(index)
+        return draw_frame(self._renderer(model), data)
+
+    def _renderer(self, model: mujoco.MjModel) -> mujoco.Renderer:
+        """A renderer of ``model``, kept while its model is among the ``num_envs`` drawn last
+        (the cache holds the model, so its id is not reused meanwhile)."""
+        entry = self._renderers.pop(id(model), None)
+        if entry is None:
+            if len(self._renderers) >= self.num_envs:
+                close_renderer(self._renderers.pop(next(iter(self._renderers)))[1])
+            entry = (model, open_renderer(model, *FRAME_SIZE))
+        self._renderers[id(model)] = entry  # the last drawn at the end
+        return entry[1]
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+        """Env ``i``'s attribute ``name`` for each ``i``, called with ``args`` and ``kwargs``
+        if it is callable (``SyncVectorEnv.call``)."""
+        check_name(name)
+        results = []
+        for view in self._views:
+            value = getattr(view, name)
+            results.append(value(*args, **kwargs) if callable(value) else value)
+        return tuple(results)
+
+    def get_attr(self, name: str) -> tuple[Any, ...]:
+        """Env ``i``'s attribute ``name`` for each ``i`` (``call(name)``, as gymnasium's)."""
+        return self.call(name)
+
+    def set_attr(self, name: str, values: list[Any] | tuple[Any, ...] | Any) -> None:
+        """Set env ``i``'s attribute ``name`` to ``values[i]`` (a list or tuple of
+        ``num_envs`` values) or every env's to ``values``; every value is checked before
+        any is set."""
+        check_name(name, settable=True)
+        if not isinstance(values, (list, tuple)):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(
+                f"set_attr({name!r}) got {len(values)} values; allowed: a list or tuple of "
+                f"{self.num_envs} (one per env) or one value for every env"
+            )
+        checked = [check_value(name, value) for value in values]
+        for view, value in zip(self._views, checked, strict=True):
+            setattr(view, name, value)
+
+    def _check_open(self) -> None:
+        """``gymnasium.error.ClosedEnvironmentError`` once the env is closed."""
+        if self.closed:
+            raise gym.error.ClosedEnvironmentError(
+                "this InsertionVectorEnv is closed: close() released its batch; make a new one"
+            )
+
     def close_extras(self, **kwargs: Any) -> None:
-        self.physics.close()
+        """Release the renderers and the batch (its simulations, models and threads)."""
+        for _, renderer in self._renderers.values():
+            close_renderer(renderer)
+        self._renderers = {}
+        physics, self.physics = self.physics, None
+        physics.close()
+
+
+def _check_render_mode(render_mode: object, backend: str) -> None:
+    """``ValueError`` unless ``render_mode`` is one the vector env draws on ``backend``."""
+    if render_mode is None:
+        return
+    if not (isinstance(render_mode, str) and render_mode == "rgb_array"):
+        raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
+    if backend not in DRAWABLE_BACKENDS:
+        raise ValueError(
+            f"render_mode='rgb_array' is not supported on backend={backend!r}; allowed: "
+            f"backend {', '.join(map(repr, DRAWABLE_BACKENDS))}, or render_mode=None"
+        )

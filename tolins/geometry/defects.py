@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from numbers import Integral
 
 import numpy as np
 
@@ -74,9 +75,39 @@ def check_defect_sigma(spec: CircularSocket, sigma: object, field: str = "sigma"
 DEFECT_KINDS = ("bent", "pitch", "burr", "short", "blocked")
 
 
+def check_rng(rng: object, field: str = "rng") -> np.random.Generator:
+    """``rng`` as a ``numpy.random.Generator``: itself, or one made by
+    ``numpy.random.default_rng`` from ``None`` (fresh entropy), an integer seed ≥ 0 (or a
+    list of them), a ``SeedSequence`` or a ``BitGenerator``; ``ValueError`` naming ``field``
+    otherwise."""
+    allowed = "None, a numpy.random.Generator, or an integer seed ≥ 0 (or a list of them)"
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, (np.random.SeedSequence, np.random.BitGenerator)) or rng is None:
+        return np.random.default_rng(rng)
+    if isinstance(rng, (list, tuple)) and rng and all(_is_seed(seed) for seed in rng):
+        return np.random.default_rng([int(seed) for seed in rng])
+    if _is_seed(rng):
+        return np.random.default_rng(int(rng))
+    raise ValueError(f"{field}={rng!r} is not a random generator or seed; allowed: {allowed}")
+
+
+def _is_seed(value: object) -> bool:
+    """Whether ``value`` is an integer ≥ 0 (Python's or numpy's), not a bool."""
+    return isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)) and value >= 0
+
+
+def _check_sigma_given(sigma: object, kind: str) -> None:
+    """``ValueError`` for ``sigma=None`` with a kind that needs a scale (all but blocked)."""
+    if sigma is None and kind != "blocked":
+        raise ValueError(
+            f"sigma=None is for kind='blocked' only; allowed for kind={kind!r}: a finite number > 0"
+        )
+
+
 def sample_defects(
     spec: CircularSocket,
-    sigma: float | None = None,
+    sigma: float | None,
     rng: np.random.Generator | int | None = None,
     *,
     kind: str = "bent",
@@ -90,15 +121,17 @@ def sample_defects(
     cell). A first draw that is valid is the result, so the same ``rng`` gives the same
     workpiece as a single draw did. ``sigma`` (mm) must pass :func:`check_defect_sigma`;
     any offsets ``spec`` already had are replaced; ``rng`` is a ``numpy.random.Generator``
-    or a seed for one. ``kind`` (:data:`DEFECT_KINDS`, module docstring) draws another kind
-    of defect at the scale ``sigma`` instead.
+    or a seed for one (:func:`check_rng`). ``kind`` (:data:`DEFECT_KINDS`, module docstring)
+    draws another kind of defect at the scale ``sigma`` instead. ``sigma`` has no default:
+    every kind needs one but ``blocked``, which needs ``None``.
     """
     if kind != "bent":
         return _sample_kind(spec, sigma, rng, kind)
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r} cannot have bent pins; allowed: a CircularSocket")
+    _check_sigma_given(sigma, kind)
     sigma = check_defect_sigma(spec, sigma)
-    rng = np.random.default_rng(rng)
+    rng = check_rng(rng)
     limit = spec.offset_limit
     for _ in range(MAX_DRAWS):
         offsets = rng.normal(0.0, sigma, size=(spec.n_pins, 2))
@@ -142,12 +175,13 @@ def _sample_kind(
         raise ValueError(f"kind={kind!r} is unknown; allowed: {', '.join(DEFECT_KINDS)}")
     if not isinstance(spec, CircularSocket):
         raise ValueError(f"spec={spec!r} cannot have {kind} defects; allowed: a CircularSocket")
-    rng = np.random.default_rng(rng)
+    rng = check_rng(rng)
     if kind == "blocked":
         if sigma is not None:
             raise ValueError(f"sigma={sigma!r} is set for kind='blocked'; allowed: None")
         hole = int(rng.integers(spec.n_pins))
         return dataclasses.replace(spec, blocked_holes=(hole,))
+    _check_sigma_given(sigma, kind)
     sigma = check_positive("sigma", sigma, "mm" if kind != "pitch" else "(relative)")
     limit = _KIND_LIMITS[kind]
     if sigma > limit:

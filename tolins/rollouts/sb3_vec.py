@@ -19,6 +19,7 @@ import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from tolins.envs.tasks import make_vec
+from tolins.envs.vector import check_actions_shape
 
 
 def _row(infos: dict[str, Any], i: int) -> dict[str, Any]:
@@ -59,6 +60,9 @@ class Sb3VectorEnv(VecEnv):
         return observations.astype(np.float32)
 
     def step_async(self, actions: np.ndarray) -> None:
+        """Hold ``actions`` ``(n_envs, 4)`` (each in ``[-1, 1]``) for :meth:`step_wait`;
+        ``ValueError`` for another shape, before anything steps."""
+        check_actions_shape(actions, self.num_envs, "one action in [-1, 1]^4 per env")
         self._actions = np.asarray(actions)
 
     def step_wait(self):

@@ -142,15 +142,16 @@ def _infer_study(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from tolins.inference.report import format_table, save_plot, write_json
-    from tolins.inference.study import StudyConfig, run_study
+    from tolins.inference.study import StudyConfig, parse_methods, run_study
 
     try:
+        methods = StudyConfig.methods if args.methods is None else parse_methods(args.methods)
         config = StudyConfig(
             samples=args.samples,
             seed=args.seed,
             particles=args.particles,
             workers=args.workers,
-            methods=tuple(args.methods.split(",")) if args.methods else StudyConfig.methods,
+            methods=methods,
             discard_below=args.discard_below,
             physics=args.physics,
             kind_samples=args.kind_samples,
@@ -171,7 +172,15 @@ def _infer_study(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    import tolins
+
     parser = cli_checks.Parser(prog="tolins", description=__doc__)
+    parser.add_argument(
+        "--version",
+        action="version",
+        version=f"tolins {tolins.__version__}",
+        help="print the installed version and exit",
+    )
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
         "demo", help="roll out both experts in every preset environment and print a table"

@@ -118,12 +118,13 @@ def env_ids(
 
 
 def preset_env_ids(*, several: bool = False) -> Callable[[str], str]:
-    """:func:`env_ids` of the preset tasks (``tolins.envs.tasks.TASKS``); the generic id
-    is refused, since its ``socket=`` has no option."""
-    from tolins.envs.tasks import GENERIC_ID, TASKS
+    """:func:`env_ids` of every preset task, the paper's and the grades
+    (``tolins.envs.tasks.env_ids``); the generic id is refused, since its ``socket=`` has
+    no option."""
+    from tolins.envs import tasks
 
-    reasons = {GENERIC_ID: "it needs socket=, which no option sets"}
-    return env_ids([task.gym_id for task in TASKS], several=several, reasons=reasons)
+    reasons = {tasks.GENERIC_ID: "it needs socket=, which no option sets"}
+    return env_ids(tasks.env_ids(generic=False), several=several, reasons=reasons)
 
 
 def input_file(option: str, path: str | os.PathLike[str]) -> Path:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,16 @@ FIGURES = ("reward", "success", "steps", "collisions")
 SCHEMA = "tolins.results/2"
 #: The schemas :func:`read_results` reads (/1 has no force figures).
 READABLE = ("tolins.results/1", SCHEMA)
+#: The values a figure of one episode can take (and so its means, CIs and per-seed
+#: values): a success is 0 or 1, steps, collisions and the force figures are counts or
+#: magnitudes, a reward may be negative.
+RANGES: dict[str, tuple[float, float]] = {
+    "reward": (-math.inf, math.inf),
+    "success": (0.0, 1.0),
+    "steps": (0.0, math.inf),
+    "collisions": (0.0, math.inf),
+    **dict.fromkeys(FORCE_FIGURES, (0.0, math.inf)),
+}
 
 
 def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
@@ -141,8 +152,9 @@ def read_results(path: str | os.PathLike) -> dict[str, Any]:
 def entry_problem(entry: Any) -> str | None:
     """What is wrong with a ``results.json`` row entry (``None``: nothing found): its
     means and counts are finite numbers, its per-seed and per-episode figures lists of
-    them (one per seed), and ``reward_mean`` the mean of its per-episode (or per-seed)
-    rewards."""
+    them (one per seed), every figure's values possible ones (:data:`RANGES`: a success
+    rate in [0, 1], no negative count, a std at most half the range, a CI in order), and
+    ``reward_mean`` the mean of its per-episode (or per-seed) rewards."""
     if not isinstance(entry, dict):
         return f"a {type(entry).__name__}; allowed: an object of figures"
     for key in ("reward_mean", "success_mean"):
@@ -168,6 +180,9 @@ def entry_problem(entry: Any) -> str | None:
         and all(isinstance(seed, list) and all(_finite(r) for r in seed) for seed in episodes)
     ):
         return "reward_per_episode is not a list of lists of finite numbers (one per seed)"
+    problem = _count_problem(entry) or _range_problem(entry)
+    if problem:
+        return problem
     per_seed = entry.get("reward_per_seed")
     if episodes and per_seed is not None:
         means = [float(np.mean(seed)) if seed else None for seed in episodes]
@@ -191,6 +206,61 @@ def entry_problem(entry: Any) -> str | None:
 
 def _finite(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
+
+
+def _count_problem(entry: dict[str, Any]) -> str | None:
+    """What is wrong with an entry's counts: a seed has ≥ 1 episode, faults are episodes."""
+    seeds, episodes = entry.get("seeds", 1), entry.get("episodes")
+    if episodes is not None and seeds > episodes:
+        return f"seeds {seeds} > episodes {episodes}; allowed: ≥ 1 episode per seed"
+    faults = entry.get("faults")
+    if faults is None:
+        return None
+    if not isinstance(faults, int) or isinstance(faults, bool) or faults < 0:
+        return f"faults {faults!r}; allowed: an integer ≥ 0"
+    if episodes is not None and faults > episodes:
+        return f"faults {faults} > episodes {episodes}; allowed: at most one per episode"
+    return None
+
+
+def _range_text(low: float, high: float) -> str:
+    """``low … high`` in words, as an error message's "allowed"."""
+    if math.isinf(high):
+        return "a finite number" if math.isinf(low) else f"a finite number ≥ {low:g}"
+    return f"a number {low:g} … {high:g}"
+
+
+def _range_problem(entry: dict[str, Any]) -> str | None:
+    """The first of an entry's figures (means, stds, per-seed and per-episode values,
+    CIs) outside what one episode's figure can come to (:data:`RANGES`)."""
+    for figure, (low, high) in RANGES.items():
+        allowed = _range_text(low, high)
+
+        def inside(value: Any, low: float = low, high: float = high) -> bool:
+            return _finite(value) and low <= value <= high
+
+        mean = entry.get(f"{figure}_mean")
+        if mean is not None and not inside(mean):
+            return f"{figure}_mean {mean!r}; allowed: {allowed}"
+        std, most = entry.get(f"{figure}_std"), (high - low) / 2
+        if std is not None and not inside(std, 0.0, most + 1e-12):  # 1e-12: float rounding
+            return f"{figure}_std {std!r}; allowed: {_range_text(0.0, most)}"
+        per_seed = entry.get(f"{figure}_per_seed")
+        if isinstance(per_seed, list) and not all(inside(v) for v in per_seed):
+            return f"{figure}_per_seed {per_seed!r}; allowed: a list of {allowed} each"
+        per_episode = entry.get(f"{figure}_per_episode")
+        if per_episode is not None and not (
+            isinstance(per_episode, list)
+            and all(isinstance(seed, list) and all(inside(v) for v in seed) for seed in per_episode)
+        ):
+            return f"{figure}_per_episode: allowed: a list (one per seed) of lists of {allowed}"
+        for key in (f"{figure}_ci", f"{figure}_iqm_ci"):
+            ci = entry.get(key)
+            if ci is not None and not (
+                isinstance(ci, list) and len(ci) == 2 and all(map(inside, ci)) and ci[0] <= ci[1]
+            ):
+                return f"{key} {ci!r}; allowed: [low, high] of {allowed} each, low ≤ high"
+    return None
 
 
 def standard_error(entry: dict[str, Any], figure: str = "reward") -> float:

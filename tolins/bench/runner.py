@@ -4,7 +4,8 @@ Stages (all cached by config hash under ``DIR/stages``, see :mod:`.stages`): the
 each selected row needs, once per training seed (:mod:`.training`); one evaluation per
 row and seed (:mod:`.evaluation`); the inference study. The stages that have not finished
 run as jobs of an executor (:mod:`.executor`: this process, or Ray tasks on a cluster),
-each after the stage it needs. Then the reports: every file in ``DIR`` is rewritten from
+each after the stage it needs, under one progress bar over all of them (:mod:`.progress`:
+the stage running, the time left). Then the reports: every file in ``DIR`` is rewritten from
 the finished stages (:mod:`.report`), and ``timeline.png`` shows when and where each
 stage ran (:mod:`.timeline`).
 """
@@ -28,6 +29,7 @@ from tolins.bench.executor import Job, make_executor
 from tolins.bench.integrity import StageFileError, checked_episodes, read_json
 from tolins.bench.lock import locked_folder
 from tolins.bench.profiles import PROFILES, Profile
+from tolins.bench.progress import BenchProgress, expected_cost
 from tolins.bench.report import write_reports
 from tolins.bench.results import row_entry
 from tolins.bench.robustness import PREFIX, plan_robustness, robustness_results
@@ -83,16 +85,16 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
                 args,
                 takes_upstream=False,
             )
-        bar = tqdm(total=len(rows) * seeds, desc="evaluate", unit="row×seed", disable=not progress)
-        bar.update(sum(name.startswith("eval-") for name in plan.done))
-        plan.done.update(
-            executor.run(
-                plan.jobs,
-                on_start=lambda job: _log_start(job, plan, log),
-                on_done=lambda job, result: _log_done(job, result, cache, log, bar),
+        names = [*plan.done, *(job.name for job in plan.jobs)]
+        costs = {name: expected_cost(name, profile, config.backend) for name in names}
+        with BenchProgress(costs, plan.done, show=progress) as stages:
+            plan.done.update(
+                executor.run(
+                    plan.jobs,
+                    on_start=lambda job: _log_start(job, plan, log, stages),
+                    on_done=lambda job, result: _log_done(job, result, plan, log, stages),
+                )
             )
-        )
-        bar.close()
         run.stage_times = _stage_times(plan, cache, executor.placement)
     finally:
         executor.close()
@@ -233,7 +235,8 @@ def _plan_evaluations(plan: _Plan, trainer: Trainer, rows: list[Row], seeds: int
             )
 
 
-def _log_start(job: Job, plan: _Plan, log: Callable[[str], None]) -> None:
+def _log_start(job: Job, plan: _Plan, log: Callable[[str], None], stages: BenchProgress) -> None:
+    stages.start(job.name)
     if job.name in plan.trainings:
         log(f"training {job.name} ({plan.trainings[job.name]})")
     elif job.name == "inference-study":
@@ -243,16 +246,16 @@ def _log_start(job: Job, plan: _Plan, log: Callable[[str], None]) -> None:
 
 
 def _log_done(
-    job: Job, result: Path, cache: StageCache, log: Callable[[str], None], bar: tqdm
+    job: Job, result: Path, plan: _Plan, log: Callable[[str], None], stages: BenchProgress
 ) -> None:
-    if job.name.startswith("eval-"):
-        bar.update()
-    elif job.name.startswith("demos-"):
-        log(f"{job.name}: {job.args[1].episodes} episodes written ({cache.wall_s(result):.0f} s)")
+    wall_s = plan.cache.wall_s(result.parent if job.name in plan.trainings else result)
+    stages.finish(job.name, wall_s)
+    if job.name.startswith("demos-"):
+        log(f"{job.name}: {job.args[1].episodes} episodes written ({wall_s:.0f} s)")
     elif job.name.startswith(PREFIX):
-        log(f"{job.name}: evaluated ({cache.wall_s(result):.0f} s)")
-    elif job.name != "inference-study":
-        log(f"{job.name}: trained ({cache.wall_s(result.parent):.0f} s)")
+        log(f"{job.name}: evaluated ({wall_s:.0f} s)")
+    elif job.name in plan.trainings:
+        log(f"{job.name}: trained ({wall_s:.0f} s)")
 
 
 def _evaluation_config(

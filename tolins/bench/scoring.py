@@ -15,7 +15,7 @@ from tolins.bench.config import BACKENDS
 from tolins.bench.evaluation import eval_seeds, evaluate
 from tolins.bench.results import read_results, results_document, row_entry
 from tolins.bench.table import PAPER, ROWS, Row
-from tolins.envs.tasks import TASKS
+from tolins.envs.tasks import env_ids
 
 #: Episodes of a row in every bench profile but ``tiny``.
 EPISODES = 100
@@ -44,7 +44,7 @@ def evaluate_policy(
     Raises ``ValueError`` for an unknown env id or backend, a bad episode count or a
     policy that cannot be loaded or returns a malformed action.
     """
-    allowed = [task.gym_id for task in TASKS]
+    allowed = env_ids(generic=False)  # the generic id needs a socket= it cannot be given
     if env_id not in allowed:
         raise ValueError(f"env {env_id!r} is unknown; allowed: {', '.join(allowed)}")
     if backend not in BACKENDS:

@@ -110,6 +110,21 @@ PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
 GENERIC_ID = "tolins/Insert-v1"
 
 
+def env_ids(*, generic: bool = True) -> tuple[str, ...]:
+    """Every tolins gymnasium id: the presets' (the paper's, then the grades), then the
+    generic one (left out with ``generic=False``)."""
+    presets = tuple(task.gym_id for task in PRESETS)
+    return (*presets, GENERIC_ID) if generic else presets
+
+
+def check_env_id(env_id: str) -> str:
+    """``env_id`` if it is a tolins id (:func:`env_ids`); else ``ValueError`` listing them."""
+    allowed = env_ids()
+    if env_id not in allowed:
+        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(allowed)}")
+    return env_id
+
+
 def register_envs() -> None:
     """Register every preset (and the generic id) with gymnasium; safe to call twice."""
     entry_points = {"entry_point": ENTRY_POINT, "vector_entry_point": VECTOR_ENTRY_POINT}
@@ -125,9 +140,6 @@ def make_vec(env_id: str, num_envs: int = 1, **kwargs: Any) -> gym.vector.Vector
     **kwargs)``: the batched :class:`~tolins.envs.vector.InsertionVectorEnv` of a tolins id
     (``backend=``, ``num_threads=``, ``autoreset_mode=`` and every ``InsertionEnv``
     keyword)."""
-    if env_id not in gym.registry or not str(env_id).startswith("tolins/"):
-        ids = sorted(i for i in gym.registry if i.startswith("tolins/"))
-        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(ids)}")
     return gym.make_vec(
-        env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs
+        check_env_id(env_id), num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs
     )

@@ -133,6 +133,24 @@ class StudyConfig:
             )
 
 
+def parse_methods(text: str) -> tuple[str, ...]:
+    """The methods named by ``tolins infer-study --methods TEXT``: comma-separated names
+    of :data:`METHODS` (spaces around a name ignored), each at most once, at least one.
+    Raises ``ValueError`` naming the option, what is wrong and the allowed names."""
+    names = tuple(name.strip() for name in text.split(","))
+    allowed = f"allowed: a comma-separated subset of {', '.join(METHODS)}"
+    if not any(names):
+        raise ValueError(f"--methods {text!r} names no method; {allowed}")
+    for name in names:
+        if not name:
+            raise ValueError(f"--methods {text!r} has an empty name; {allowed}")
+        if name not in METHODS:
+            raise ValueError(f"--methods: {name!r} is unknown; {allowed}")
+        if names.count(name) > 1:
+            raise ValueError(f"--methods: {name!r} is named twice; {allowed}")
+    return names
+
+
 @dataclass(frozen=True)
 class StudyResult:
     """Per-workpiece outcomes: ``attempts[method][k]`` = attempt that inserted, 0 if none.

@@ -65,10 +65,18 @@ def _check_paths(args: argparse.Namespace) -> None:
     for option in ("init", "nominal"):
         if getattr(args, option, None) is not None:
             cli_checks.input_file(f"--{option}", getattr(args, option))
-    if args.method != "bc" and not args.resume and (out / CHECKPOINT).exists():
+    if args.method == "bc":
+        return
+    found = (out / CHECKPOINT).exists()
+    if not args.resume and found:
         raise cli_checks.OptionError(
             f"--out {out}: holds {CHECKPOINT} of an earlier run; allowed: --resume to "
             "continue it, or a folder without one"
+        )
+    if args.resume and not found:
+        raise cli_checks.OptionError(
+            f"--resume: no checkpoint found in {out} (no {CHECKPOINT}); allowed: --out the "
+            "folder of an earlier run, or no --resume to start a new one"
         )
 
 

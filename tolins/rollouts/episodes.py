@@ -16,6 +16,7 @@ import numpy as np
 
 import tolins.envs  # noqa: F401  (registers the env ids)
 from tolins.envs.episode import check_action
+from tolins.envs.tasks import check_env_id
 from tolins.rollouts.forces import ForceScores, ForceTracker
 
 Policy = Callable[[np.ndarray], np.ndarray]
@@ -144,14 +145,6 @@ def rollout(env: gym.Env, policy: Policy, seed: int) -> Rollout:
         bool(info["success"]),
         int(info["n_collisions"]),
     )
-
-
-def check_env_id(env_id: str) -> str:
-    """``env_id`` if it is a registered tolins id; else ``ValueError`` listing them."""
-    if env_id not in gym.registry or not str(env_id).startswith("tolins/"):
-        ids = sorted(i for i in gym.registry if i.startswith("tolins/"))
-        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(ids)}")
-    return env_id
 
 
 def make_env(env_id: str, backend: str) -> gym.Env:

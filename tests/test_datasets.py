@@ -3,6 +3,7 @@ for bit, and the learners read them (tolins.datasets)."""
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 
@@ -22,14 +23,17 @@ from tolins.datasets import (  # noqa: E402
     write_dataset,
 )
 from tolins.geometry.specs import CircularSocket  # noqa: E402
+from tolins.learning.actors import make_actor  # noqa: E402
 from tolins.learning.demonstrations import collect  # noqa: E402
+from tolins.learning.runs import trained_bc  # noqa: E402
 
 NAME = "tolins/test/mixed-v0"
 
 
 def _write(root, env_id, entries, episodes, backend, **kwargs):
     socket = kwargs.get("env_kwargs", {}).get("socket") or gym.spec(env_id).kwargs["socket"]
-    sources = [make_source(e, socket, env_id=env_id, backend=backend, seed=0) for e in entries]
+    train_bc = functools.partial(trained_bc, env_id, backend, 0)
+    sources = [make_source(e, socket, make_actor=make_actor, train_bc=train_bc) for e in entries]
     return write_dataset(env_id, sources, episodes, root, NAME, backend=backend, **kwargs)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -10,7 +11,8 @@ from typing import TYPE_CHECKING
 from tolins import cli_checks
 
 if TYPE_CHECKING:
-    from tolins.datasets.sources import Source
+    from tolins.datasets.sources import Policy, Source
+    from tolins.geometry.specs import SocketSpec
 
 _RECIPES = "expert-safe, expert-efficient, bc, random, mixed"
 _NAMED = {"safe": "expert-safe", "efficient": "expert-efficient"}
@@ -110,10 +112,22 @@ def _sources(args: argparse.Namespace) -> list[Source]:
 
     entries = recipe_entries(args.recipe) if args.recipe else (args.policy,)
     socket = gym.spec(args.env).kwargs["socket"]
-    return [
-        make_source(e, socket, env_id=args.env, backend=args.backend, seed=args.seed)
-        for e in entries
-    ]
+    train_bc = functools.partial(_trained_bc, args.env, args.backend, args.seed)
+    return [make_source(e, socket, make_actor=_make_actor, train_bc=train_bc) for e in entries]
+
+
+def _make_actor(entry: str, socket: SocketSpec) -> Policy:
+    """:func:`tolins.learning.actors.make_actor`, imported (with torch) on first use."""
+    from tolins.learning.actors import make_actor
+
+    return make_actor(entry, socket)
+
+
+def _trained_bc(env_id: str, backend: str, seed: int) -> Policy:
+    """:func:`tolins.learning.runs.trained_bc`, imported (with torch) on first use."""
+    from tolins.learning.runs import trained_bc
+
+    return trained_bc(env_id, backend, seed)
 
 
 def _write(args: argparse.Namespace, sources: list[Source], name: str) -> int:

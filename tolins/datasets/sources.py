@@ -13,8 +13,11 @@ random             uniform random actions in ``±a_max`` (``random``)
 mixed              safe, efficient, bc, random in turn
 =================  ==========================================================
 
-The ``bc`` policy is :func:`tolins.learning.runs.run_bc`'s π_bc with the default configs
-and the dataset's seed (50 safe-expert episodes, 200 epochs): the same policy as
+Datasets sit below learning, so the policies that need learning code come in from the
+caller: ``make_actor`` turns a name or file into a policy, and ``train_bc`` makes the ``bc``
+policy. ``tolins dataset`` passes :func:`tolins.learning.actors.make_actor` and
+:func:`tolins.learning.runs.trained_bc`, π_bc with the default configs and the dataset's
+seed (50 safe-expert episodes, 200 epochs): the same policy as
 ``tolins train bc --env ID --seed SEED --backend BACKEND``. It is trained when its first
 episode starts, so that a dataset's options are all checked before that work.
 """
@@ -31,6 +34,9 @@ from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX
 
 Policy = Callable[[np.ndarray], np.ndarray]
+
+#: Makes the policy a name or file stands for (``ValueError`` for a bad one).
+ActorMaker = Callable[[str, SocketSpec], Policy]
 
 #: What ``--policy`` takes, for error messages.
 POLICY_FORMS = (
@@ -67,28 +73,22 @@ class RandomPolicy:
         return self._rng.uniform(-A_MAX, A_MAX)
 
 
-def _bc_policy(env_id: str, backend: str, seed: int) -> Policy:
-    """π_bc of ``tolins train bc`` with the default configs (trained here, a few seconds)."""
-    from tolins.learning.bc import behaviour_clone
-    from tolins.learning.policy_config import BCConfig, TaskConfig
-    from tolins.learning.runs import demonstrations
-
-    task = TaskConfig(backend=backend, seed=seed)
-    return behaviour_clone(demonstrations([env_id], task), BCConfig(), seed=seed).policy.bind()
-
-
-def make_source(entry: str, socket: SocketSpec, *, env_id: str, backend: str, seed: int) -> Source:
-    """The policy ``entry``: ``random``, ``bc`` (see the module docstring; trained on first
-    use), or anything :func:`tolins.learning.actors.make_actor` takes (``safe``,
-    ``efficient``, a policy file, an SB3 ``.zip``, ``MODULE:NAME``). Raises ``ValueError``
-    for a bad entry."""
+def make_source(
+    entry: str,
+    socket: SocketSpec,
+    *,
+    make_actor: ActorMaker,
+    train_bc: Callable[[], Policy],
+) -> Source:
+    """The policy ``entry``: ``random``; ``bc``, the policy ``train_bc()`` returns (called
+    once, when the first ``bc`` episode starts); or ``make_actor(entry, socket)`` for
+    anything else (an expert's name, a policy file, an SB3 ``.zip``, ``MODULE:NAME``).
+    Raises ``ValueError`` for a bad entry, naming every ``--policy`` form."""
     if entry == "random":
         return Source("random", RandomPolicy)
     if entry == "bc":
-        trained = functools.cache(lambda: _bc_policy(env_id, backend, seed))
+        trained = functools.cache(train_bc)
         return Source("bc", lambda _: trained())
-    from tolins.learning.actors import make_actor
-
     try:
         actor = make_actor(entry, socket)
     except ValueError as error:  # what was wrong, and every --policy form (random, bc too)

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from tolins.geometry.specs import SocketSpec
+from tolins.learning.embedding import encode
 from tolins.learning.external import ALLOWED
 from tolins.learning.policy import load_policy
 from tolins.policies import EXPERTS
@@ -53,6 +54,4 @@ def _policy_file(path: Path, socket: SocketSpec) -> Callable[[np.ndarray], np.nd
     policy, _ = load_policy(path)
     if policy.architecture.kind != "tolerance_guided":
         return policy.bind()
-    from tolins.embedding import encode  # the embedding imports learning: import on use
-
     return policy.bind(encode(socket))

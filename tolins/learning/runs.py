@@ -8,6 +8,7 @@ seed and ``tolins.__version__`` (:func:`tolins.learning.artefacts.run_metadata`)
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,6 +46,13 @@ def demonstrations(env_ids: list[str], task: TaskConfig) -> list[Rollout]:
         seed = task.seed * 1000 + index
         episodes += collect(env_id, task.expert, task.demonstrations, seed, task.backend)
     return episodes
+
+
+def trained_bc(env_id: str, backend: str, seed: int) -> Callable[[np.ndarray], np.ndarray]:
+    """π_bc of ``tolins train bc --env ENV_ID --seed SEED --backend BACKEND`` with the
+    default configs, ready to act and not written anywhere (a few seconds of training)."""
+    task = TaskConfig(backend=backend, seed=seed)
+    return behaviour_clone(demonstrations([env_id], task), BCConfig(), seed=seed).policy.bind()
 
 
 def _demos_metadata(demos: Demos | None) -> dict[str, Any]:

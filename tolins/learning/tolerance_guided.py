@@ -1,6 +1,6 @@
 """Tolerance-guided training (the paper's second phase, Fig. 2c): φ1 copied from π_n and
 frozen, the residual φ2 (zero at the start) trained by RS-GAIL over a set of workpieces,
-each seen with its tolerance embedding ψ (:func:`tolins.embedding.encode`)."""
+each seen with its tolerance embedding ψ (:func:`tolins.learning.embedding.encode`)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import gymnasium as gym
 import numpy as np
 
 from tolins.learning.demonstrations import Rollout
+from tolins.learning.embedding import encode
 from tolins.learning.policy import Policy
 from tolins.learning.policy_config import ResidualConfig, RSGailConfig
 from tolins.learning.rs_gail import RSGailResult, Workpiece, train_rs_gail
@@ -23,8 +24,6 @@ def workpieces(
     """The envs with their embeddings (encoded from each env's socket unless given, with
     the embedding ``model``: the paper's, or ``"graded"`` for the tolerance grades)."""
     if embeddings is None:
-        from tolins.embedding import encode
-
         embeddings = [encode(gym.spec(env_id).kwargs["socket"], model=model) for env_id in env_ids]
     if len(embeddings) != len(env_ids):
         raise ValueError(f"{len(embeddings)} embeddings for {len(env_ids)} envs; allowed: one each")

@@ -250,6 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_evaluate(commands)
     _add_compare(commands)
     _add_dataset(commands)
+    _add_export(commands)
     return parser
 
 
@@ -275,6 +276,74 @@ def _add_dataset(commands: argparse._SubParsersAction) -> None:
     from tolins.datasets.cli import add_dataset_parser
 
     add_dataset_parser(commands)
+
+
+def _export(args: argparse.Namespace) -> int:
+    from tolins.mjcf.export import EXPORT_SUFFIXES
+
+    out = cli_checks.output_file("--out", args.out, suffixes=EXPORT_SUFFIXES)
+    from pathlib import Path
+
+    from tolins import atomic
+    from tolins.geometry.spec_json import spec_from_json
+    from tolins.mjcf.export import export_bytes
+
+    try:
+        if args.env is not None:
+            from tolins.envs.tasks import PRESETS
+
+            spec = next(task.socket for task in PRESETS if task.gym_id == args.env)
+        elif args.socket.lstrip().startswith("{"):
+            spec = spec_from_json(args.socket)
+        elif Path(args.socket).is_file():
+            spec = spec_from_json(Path(args.socket).read_text(encoding="utf-8"))
+        else:
+            raise ValueError(
+                f"--socket {args.socket}: no such file, nor a JSON object; allowed: a JSON "
+                'object of a spec\'s fields (e.g. {"rows": 2, "cols": 2}) or a file holding one'
+            )
+        data = export_bytes(spec, out.suffix, args.part)
+    except (ValueError, OSError) as error:  # UnicodeDecodeError is a ValueError
+        print(f"tolins export: {error}", file=sys.stderr)
+        return 2
+    atomic.atomic_write(out, lambda file: file.write(data))
+    print(f"wrote {out} ({len(data) / 1e3:.0f} kB)")
+    return 0
+
+
+def _add_export(commands: argparse._SubParsersAction) -> None:
+    from tolins.envs import tasks
+
+    export = commands.add_parser(
+        "export", help="write a workpiece as a mesh (STL, GLB) or its MJCF model (.xml)"
+    )
+    which = export.add_mutually_exclusive_group(required=True)
+    which.add_argument(
+        "--env",
+        type=cli_checks.env_ids(
+            tasks.env_ids(generic=False),
+            reasons={tasks.GENERIC_ID: "its workpiece is given with --socket"},
+        ),
+        help="a preset env id: its nominal workpiece, e.g. tolins/Circle2x2-v1",
+    )
+    which.add_argument(
+        "--socket",
+        metavar="JSON",
+        help='a spec\'s fields as a JSON object, defects included (e.g. {"rows": 2, "cols": '
+        '1, "pin_offsets": [[0.1, 0], [0, -0.05]]}; a recording\'s spec), or a file holding one',
+    )
+    export.add_argument(
+        "--out",
+        required=True,
+        help="PART.stl (mm), PART.glb (glTF: metres, y up) or MODEL.xml (the MJCF model); "
+        "replaced if present",
+    )
+    export.add_argument(
+        "--part",
+        default="all",
+        help="all (the workpiece 2 mm over the board), board or workpiece; meshes only",
+    )
+    export.set_defaults(run=_export)
 
 
 def _add_train(commands: argparse._SubParsersAction) -> None:

@@ -1,7 +1,8 @@
 """Replay a recording: check the file, then hand it to the viewer that ships with rerun-sdk.
 
 Three ways: the native viewer, the web viewer served on 127.0.0.1, or a headless
-screenshot (software Vulkan: Debian's ``mesa-vulkan-drivers``, see ``scripts/setup.sh``).
+screenshot (software Vulkan: Debian's ``mesa-vulkan-drivers``, see ``scripts/setup.sh``),
+taken once the recording has streamed in (:mod:`tolins.record.capture`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from urllib.parse import quote
 import numpy as np
 from rerun.chunk import RrdReader
 
+from tolins.record.capture import CaptureError, capture
+from tolins.record.layout import STEP
 from tolins.record.snapshot import cut_recording
 from tolins.record.stale import remove_dead_temporaries
 
@@ -23,8 +26,6 @@ LOOPBACK = "127.0.0.1"
 #: Screenshot size in logical points.
 WINDOW_SIZE = "1280x800"
 SCREENSHOT_TIMEOUT_S = 180.0
-#: Renders tried before a blank screenshot is kept (:func:`_blank`).
-SCREENSHOT_ATTEMPTS = 3
 
 
 class RrdError(ValueError):
@@ -78,22 +79,14 @@ def viewer_args(
     path: Path,
     *,
     web: bool = False,
-    screenshot: Path | None = None,
     web_port: int = 9090,
     grpc_port: int = 9876,
 ) -> list[str]:
-    """Arguments of ``rerun`` for one of the three ways to replay ``path``."""
-    if web and screenshot is not None:
-        raise ValueError("web and screenshot are both set; allowed: at most one")
+    """Arguments of ``rerun`` that show ``path`` in the native or (``web``) the web viewer;
+    a screenshot's are :func:`tolins.record.capture.headless_args`."""
     args = [str(path), "--bind", LOOPBACK, "--hide-welcome-screen"]
     if web:
         return [*args, "--web-viewer", "--web-viewer-port", str(web_port), "--port", str(grpc_port)]
-    if screenshot is not None:
-        return [
-            *args,
-            *("--headless", "--screenshot-to", str(screenshot)),
-            *("--window-size", WINDOW_SIZE, "--port", "auto"),
-        ]
     return [*args, "--port", "auto"]
 
 
@@ -112,10 +105,12 @@ def take_screenshot(
     """Render ``path`` headless to the PNG ``out`` (written atomically) as it stands at
     control step ``step`` or simulated time ``time`` (s), by default at its last step;
     returns the step shown. The viewer renders a copy cut there
-    (:func:`tolins.record.snapshot.cut_recording`: the viewer itself cannot be told a time).
+    (:func:`tolins.record.snapshot.cut_recording`: the viewer itself cannot be told a time),
+    and the PNG is taken once all of it is drawn (:func:`tolins.record.capture.capture`).
 
     Raises:
-        RuntimeError: the viewer could not render (e.g. no Vulkan driver).
+        RuntimeError: the viewer could not render (e.g. no Vulkan driver), did not finish
+            drawing the recording within ``timeout`` seconds, or drew a blank picture.
     """
     if out.suffix.lower() != ".png":
         raise ValueError(f"screenshot={str(out)!r}; allowed: a path ending in .png")
@@ -126,20 +121,20 @@ def take_screenshot(
     cut = out.with_name(f".{out.stem}.{os.getpid()}.cut.rrd")
     try:
         shown = cut_recording(path, cut, step=step, time=time)
-        command = [*rerun_command(), *viewer_args(cut, screenshot=tmp)]
-        for _ in range(SCREENSHOT_ATTEMPTS):
-            result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
-            if result.returncode != 0 or not tmp.is_file():
-                lines = [
-                    ln for ln in result.stderr.splitlines() if "panicked" in ln or "rror" in ln
-                ]
-                hint = lines[0].strip() if lines else f"exit status {result.returncode}"
-                raise RuntimeError(
-                    f"{path}: headless rendering failed ({hint}); it needs a Vulkan driver, "
-                    "e.g. Debian's mesa-vulkan-drivers (scripts/setup.sh installs it)"
-                )
-            if not _blank(tmp):
-                break
+        has_steps = _has_steps(cut)
+        try:
+            png = capture(
+                rerun_command(),
+                cut,
+                step=shown if has_steps else None,
+                timeout=timeout,
+                window_size=WINDOW_SIZE,
+            )
+        except CaptureError as error:
+            raise RuntimeError(f"{path}: headless rendering failed: {error}") from error
+        tmp.write_bytes(png)
+        if _blank(tmp):
+            raise RuntimeError(f"{path}: headless rendering drew a blank picture")
         os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)
@@ -147,9 +142,13 @@ def take_screenshot(
     return shown
 
 
+def _has_steps(path: Path) -> bool:
+    """Whether the recording ``path`` has tolins's ``step`` timeline."""
+    return any(STEP in chunk.timeline_names for chunk in RrdReader(path).stream())
+
+
 def _blank(png: Path) -> bool:
-    """Whether the middle of the screenshot ``png`` is one flat colour: on a loaded machine
-    the headless viewer now and then captures before it has drawn the scene."""
+    """Whether the middle of the screenshot ``png`` is one flat colour (nothing drawn)."""
     from PIL import Image
 
     image = np.asarray(Image.open(png).convert("L"), dtype=float)

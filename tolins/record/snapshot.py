@@ -4,7 +4,9 @@ rerun 0.41's viewer has no option to open at a given time, and a blueprint's tim
 sets the timeline and the play state but not the time; from a file it plays from step 0,
 so a plain screenshot catches whatever step playback had reached. The copy therefore
 ends at the chosen step and its blueprint follows the latest data: the viewer shows the
-last step kept, and the plots up to it.
+last step kept, and the plots up to it. Its blueprint also hides the viewer's top bar (the
+menu, the search field, the window's buttons and the renderer's badges), which a figure
+does not need.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.compute as pc
 import rerun as rr
+import rerun.blueprint as rrb
 from rerun.chunk import Chunk, RrdReader
 
 from tolins.mjcf.model import scene_extent
@@ -80,11 +83,18 @@ def cut_recording(
     stream = rr.RecordingStream(
         entry.application_id, recording_id=entry.recording_id, send_properties=False
     )
-    stream.save(Path(target), default_blueprint=default_blueprint(_extent(chunks), follow=True))
+    stream.save(Path(target), default_blueprint=_figure_blueprint(_extent(chunks)))
     stream.send_chunks(chunks)
     stream.flush()
     stream.disconnect()
     return max(last["kept"], 0)
+
+
+def _figure_blueprint(extent: float | None) -> rrb.Blueprint:
+    """tolins's layout following the latest data, without the viewer's top bar."""
+    blueprint = default_blueprint(extent, follow=True)
+    blueprint.top_panel = rrb.TopPanel(state="hidden")
+    return blueprint
 
 
 def _extent(chunks: list[Chunk]) -> float | None:

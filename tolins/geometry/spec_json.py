@@ -1,0 +1,73 @@
+"""A socket spec from JSON, as ``tolins export --socket`` takes it.
+
+The object holds a spec's fields (:mod:`tolins.geometry.specs`), as a recording's metadata
+and :func:`~tolins.geometry.specs.workpiece_dict` write them::
+
+    {"type": "CircularSocket", "rows": 2, "cols": 1,
+     "pin_offsets": [[0.1, 0.0], [0.0, -0.05]], "blocked_holes": [1]}
+
+``type`` may be left out: ``sides`` makes a :class:`PolygonSocket`, ``rows`` and ``cols`` a
+:class:`CircularSocket`. ``defective`` (derived from the fields) is ignored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Mapping
+
+from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+
+SPEC_TYPES: dict[str, type[CircularSocket] | type[PolygonSocket]] = {
+    "CircularSocket": CircularSocket,
+    "PolygonSocket": PolygonSocket,
+}
+#: Keys that describe a spec without being one of its fields.
+_DERIVED = frozenset({"defective"})
+
+
+def spec_from_mapping(data: Mapping[str, object]) -> SocketSpec:
+    """The spec whose fields ``data`` holds (``type`` optional, see the module).
+
+    Raises ``ValueError`` (one line) for a wrong type, an unknown or missing field, or a
+    value the spec refuses.
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f"socket {data!r} is not an object; allowed: a JSON object of fields")
+    fields = {key: value for key, value in data.items() if key not in _DERIVED}
+    kind = fields.pop("type", None)
+    if kind is None:
+        kind = "PolygonSocket" if "sides" in fields else "CircularSocket"
+    if kind not in SPEC_TYPES:
+        raise ValueError(f"socket type={kind!r}; allowed: {', '.join(SPEC_TYPES)}")
+    cls = SPEC_TYPES[kind]
+    names = [field.name for field in dataclasses.fields(cls)]
+    unknown = sorted(set(fields) - set(names))
+    if unknown:
+        raise ValueError(f"{kind} has no field {', '.join(unknown)}; allowed: {', '.join(names)}")
+    required = [
+        field.name
+        for field in dataclasses.fields(cls)
+        if field.default is dataclasses.MISSING and field.name not in fields
+    ]
+    if required:
+        raise ValueError(f"{kind} needs {', '.join(required)}; allowed fields: {', '.join(names)}")
+    try:
+        return cls(**fields)
+    except TypeError as error:  # e.g. a list where the spec compares numbers
+        raise ValueError(f"{kind}: {error}") from None
+
+
+def spec_from_json(text: str) -> SocketSpec:
+    """The spec of the JSON object ``text`` (:func:`spec_from_mapping`).
+
+    Raises ``ValueError`` (one line) for text that is not JSON, or a spec it does not make.
+    """
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ValueError(
+            f"socket {text!r} is not JSON ({error.msg}, column {error.colno}); "
+            'allowed: a JSON object, e.g. {"rows": 2, "cols": 2}'
+        ) from None
+    return spec_from_mapping(data)

@@ -3,7 +3,7 @@
 Usage::
 
     python benchmarks/capture.py                   # 4 cases × 2 speeds, about a minute
-    python benchmarks/capture.py --eager-sensors   # the control step before issue 19
+    python benchmarks/capture.py --eager-sensors   # sensors in every physics step
 
 For each case (2*2 socket offset in x and in theta, square and hexagon peg offset in
 x) and push speed (2.5 and 0.5 mm/s), the offset is bisected between one that inserts
@@ -25,7 +25,7 @@ import numpy as np
 
 from tolins import CircularSocket, PolygonSocket
 from tolins.envs import InsertionEnv
-from tolins.envs.mujoco_backend import ServoStepper
+from tolins.physics.servo import ServoStepper
 
 FAST, SLOW = 2.5, 0.5
 STEPS = {FAST: 5, SLOW: 10}

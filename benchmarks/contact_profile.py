@@ -1,14 +1,14 @@
-"""Where a control step's time goes, per socket and regime (issue 19's profile).
+"""Where a control step's time goes, per socket and regime.
 
 Usage::
 
     python benchmarks/contact_profile.py                  # every socket and regime
-    python benchmarks/contact_profile.py --eager-sensors  # the control step before issue 19
+    python benchmarks/contact_profile.py --eager-sensors  # sensors in every physics step
     python benchmarks/contact_profile.py --contact-pairs  # make_mjcf(..., contact_pairs=True)
     python benchmarks/contact_profile.py --sockets 2*2 --regimes blocked --steps 8
 
 For each socket (2*2, 2*8, 2*20, square, hexagon) and regime (below) it runs ``--steps``
-control steps through the env's own :class:`~tolins.envs.mujoco_backend.ServoStepper`
+control steps through the env's own :class:`~tolins.physics.servo.ServoStepper`
 from the regime's start pose and reports:
 
 * ``ms/step``: CPU milliseconds of the stepping thread per control step (250 physics
@@ -46,8 +46,8 @@ import mujoco
 import numpy as np
 
 from tolins import CircularSocket, PolygonSocket
-from tolins.envs.mujoco_backend import ServoStepper
 from tolins.mjcf import make_mjcf
+from tolins.physics.servo import ServoStepper
 
 SUBSTEPS = 250
 SOCKETS = {

@@ -5,7 +5,7 @@
     python benchmarks/embedding_quality.py --model graded --figure ''  # the graded model
 
 Prints, per family, the mean region IoU (``image >= 0``) over held-out workpieces
-(:func:`tolins.learning.embedding_eval.held_out_specs`), the worst IoU, and the θ error inside
+(:func:`tolins.learning.embedding.evaluation.held_out_specs`), the worst IoU, and the θ error inside
 the true region; then writes ground truth beside prediction for a few named workpieces.
 With ``--model graded``: the graded checkpoints on held-out workpieces of the graded
 ranges, then on each tolerance-grade preset (``GRADE_TASKS``) and each paper preset.
@@ -25,7 +25,7 @@ import numpy as np
 
 from tolins import CircularSocket, PolygonSocket, embedding, tolerance
 from tolins.envs.tasks import GRADE_TASKS, TASKS
-from tolins.learning.embedding_eval import held_out_specs, measure
+from tolins.learning.embedding.evaluation import held_out_specs, measure
 
 #: Shown in the figure: the paper's Fig. 3 pair first (2*2, pins 0.3 / holes 0.5 mm,
 #: 2.5 mm intervals; square peg 1.5 / 1.575 mm), then other shapes of each family.

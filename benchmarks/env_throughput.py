@@ -5,7 +5,7 @@ Usage::
     python benchmarks/env_throughput.py            # full run, about 90 s on 2 cores
     python benchmarks/env_throughput.py --quick    # a few seconds, a smoke test
     python benchmarks/env_throughput.py --steps 20 --min-time 2
-    python benchmarks/env_throughput.py --models-only   # part 2 alone (issue 19)
+    python benchmarks/env_throughput.py --models-only   # part 2 alone
 
 What it measures, all in one run:
 
@@ -32,10 +32,10 @@ What it measures, all in one run:
    then hits all three alike and drops out. The ``match`` column checks that the bare
    loop ends at the same pose as the env, bit for bit.
 
-2. **Old vs new control step** (issue 19). For each socket and the five regimes of
+2. **Eager vs lazy sensors**. For each socket and the five regimes of
    ``contact_profile.py`` (free, approaching, blocked, sliding, inserted), blocks of
    ``--steps`` control steps of the env's :class:`ServoStepper` alternate between
-   ``old`` (sensors in every physics step, as before issue 19), ``new`` (today's default:
+   ``old`` (sensors in every physics step: the eager-sensor step), ``new`` (today's default:
    sensors only in the physics step before each read) and ``pairs`` (new, on
    ``make_mjcf(socket, contact_pairs=True)``); the fastest block of each is kept.
    ``new x`` and ``pairs x`` = old time / their time (CPU time of the stepping thread,
@@ -69,7 +69,8 @@ import numpy as np
 
 from tolins import CircularSocket, PolygonSocket, make_mjcf
 from tolins.envs import InsertionEnv
-from tolins.envs.mujoco_backend import MujocoBackend, ServoStepper
+from tolins.physics.mujoco import MujocoBackend
+from tolins.physics.servo import ServoStepper
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from contact_profile import REGIMES, SOCKETS
@@ -405,7 +406,7 @@ def print_models(steps: int, repeats: int, min_time: float) -> list[str]:
             if not same:
                 problems.append(f"{socket_name} {regime_name}: the variants' states differ")
     print(
-        "old: sensors in every physics step (before issue 19); new: sensors only before each "
+        "old: sensors in every physics step (the eager-sensor step); new: sensors only before each "
         "read (the default);\npairs: new on make_mjcf(socket, contact_pairs=True); x: old "
         "time / variant time, blocks rotating"
     )

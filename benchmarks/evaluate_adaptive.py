@@ -24,8 +24,9 @@ import numpy as np
 import torch
 
 from tolins.inference.adaptive import InferenceGuidedPolicy
-from tolins.learning.actors import make_actor
-from tolins.rollouts.episodes import Summary, run_episode, summarise
+from tolins.learning.agents.actors import make_actor
+from tolins.rollouts.episodes import run_episode
+from tolins.rollouts.summary import Summary, summarise
 
 FIRST_SEED = 10_000
 VARIANTS = ("", "+lift", "+inference", "+inference_contact")

@@ -19,8 +19,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 import torch
 
-from tolins.bench.evaluation import FIRST_SEED, eval_seeds, evaluate
-from tolins.rollouts.episodes import Summary, summarise
+from tolins.bench.jobs.policy_episodes import evaluate
+from tolins.bench.table.seeds import FIRST_SEED, eval_seeds
+from tolins.rollouts.summary import Summary, summarise
 
 
 def figures(entry: str, env_id: str, episodes: int, backend: str) -> Summary:

@@ -1,4 +1,4 @@
-"""The tolerance-grade table (issue 22): agreement, capture and cost per radial clearance.
+"""The tolerance-grade table: agreement, capture and cost per radial clearance.
 
 Usage::
 

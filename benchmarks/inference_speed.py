@@ -1,4 +1,4 @@
-"""Time one goal query (posterior + CMA-ES) for the study's 2*1 socket (issue 6, item 5).
+"""Time one goal query (posterior + CMA-ES) for the study's 2*1 socket.
 
 Histories of 1..9 failed attempts from the study's own methods (binary outcomes, blocked
 pins, blocked pins and touch bearings); each query is

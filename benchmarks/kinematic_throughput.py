@@ -5,7 +5,7 @@ Usage::
     python benchmarks/kinematic_throughput.py            # full run, about 10 s
     python benchmarks/kinematic_throughput.py --quick    # a second or two, a smoke test
 
-A :class:`~tolins.envs.kinematic_batch.KinematicBatch` of ``--batch`` workpieces (256)
+A :class:`~tolins.physics.kinematic.KinematicBatch` of ``--batch`` workpieces (256)
 steps ``--steps`` control steps (40 = one episode) from a reset, in three regimes:
 
 * ``free``: in the air (``z`` 15–18 mm), random actions: no step checks collisions;
@@ -37,8 +37,8 @@ import numpy as np  # noqa: E402
 
 from tolins import CircularSocket, PolygonSocket  # noqa: E402
 from tolins.envs import InitialPoseDistribution  # noqa: E402
-from tolins.envs.kinematic_batch import KinematicBatch  # noqa: E402
 from tolins.paper import A_MAX, CONTROL_DT  # noqa: E402
+from tolins.physics.kinematic import KinematicBatch  # noqa: E402
 
 SOCKETS = {
     "2*2": CircularSocket(2, 2),

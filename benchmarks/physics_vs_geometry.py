@@ -10,7 +10,7 @@ Usage::
 
 ``--grade UM`` probes the 2*2 and 2*8 sockets and the square and hexagon pegs with their
 holes resized to a radial clearance of UM µm (``tolins.geometry.specs.with_clearance``,
-the tolerance-grade presets of issue 22), the band ±5 % of the clearance and the offsets
+the tolerance-grade presets), the band ±5 % of the clearance and the offsets
 ±25 % of it unless ``--band`` / ``--band-max`` say otherwise.
 
 For each socket, ``--probes`` random poses ``[x, y, theta]`` near the boundary of the

@@ -40,10 +40,10 @@ def rs_gail_throughput(iterations: int, cpus: int) -> dict:
     """Part 1: the same RS-GAIL run on threads and on Ray actors."""
     import numpy as np
 
-    from tolins.learning.bc import behaviour_clone
-    from tolins.learning.demonstrations import collect
-    from tolins.learning.policy_config import BCConfig, RSGailConfig
-    from tolins.learning.rs_gail import Workpiece, train_rs_gail
+    from tolins.learning.imitation.bc import behaviour_clone
+    from tolins.learning.imitation.config import BCConfig, RSGailConfig
+    from tolins.learning.imitation.demonstrations import collect
+    from tolins.learning.imitation.rs_gail import Workpiece, train_rs_gail
     from tolins.rollouts.pool import VectorPool
     from tolins.rollouts.ray_pool import RayPool
 
@@ -90,8 +90,8 @@ def rs_gail_throughput(iterations: int, cpus: int) -> dict:
 
 def bench_wall(profile: str, rows: str, seeds: int | None, keep: Path) -> dict:
     """Part 2: the same short bench with the local and the Ray executor."""
-    from tolins.bench.config import BenchConfig
-    from tolins.bench.runner import run_bench
+    from tolins.bench.pipeline.config import BenchConfig
+    from tolins.bench.pipeline.runner import run_bench
 
     figures, outputs = {}, {}
     for executor in ("local", "ray"):

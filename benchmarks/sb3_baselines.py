@@ -5,7 +5,7 @@ Usage::
     python benchmarks/sb3_baselines.py sac --backend kinematic --steps 40000 --every 5000
     python benchmarks/sb3_baselines.py ppo --backend mujoco --steps 10000 --reward sparse
 
-The same training as the bench's rows R1.x (:func:`tolins.learning.sb3.train_sb3`, torch on
+The same training as the bench's rows R1.x (:func:`tolins.learning.agents.sb3.train_sb3`, torch on
 one thread): the agent learns from ``--reward`` (default ``dense``); every ``--every`` env
 steps its deterministic policy is scored with the paper's sparse reward on ``--episodes``
 episodes (seeds 30000…). Each line: env steps trained, cumulative training throughput
@@ -19,8 +19,8 @@ import tempfile
 
 import tolins  # noqa: F401  (registers the envs)
 from tolins.envs.reward import REWARD_MODES
-from tolins.learning.sb3 import train_sb3
-from tolins.learning.sb3_config import ALGORITHM_NAMES, Sb3Config
+from tolins.learning.agents.sb3 import train_sb3
+from tolins.learning.agents.sb3_config import ALGORITHM_NAMES, Sb3Config
 
 
 def main() -> None:

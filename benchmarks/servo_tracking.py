@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from tolins import CircularSocket
-from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.physics.mujoco import MujocoBackend
 
 CONTROL_DTS = (0.002, 0.003, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25, 1.0)
 DOWN = np.array([0.0, 0.0, 0.0, -2.5])

@@ -1,4 +1,4 @@
-"""Cheaper physics-step variants, bit-identical or not: speed-up and deviation (issue 19).
+"""Cheaper physics-step variants, bit-identical or not: speed-up and deviation.
 
 Usage::
 
@@ -39,7 +39,7 @@ import numpy as np
 from contact_profile import REGIMES, SOCKETS, regime
 
 from tolins import make_mjcf
-from tolins.envs.mujoco_backend import ServoStepper
+from tolins.physics.servo import ServoStepper
 
 CONTROL_DT = 0.25
 

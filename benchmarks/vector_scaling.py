@@ -1,4 +1,4 @@
-"""Scaling of the batched vector env (issue 18): steps/s against N, threads and processes;
+"""Scaling of the batched vector env: steps/s against N, threads and processes;
 SB3 PPO wall time with 1 and 8 envs; the step cost of Meta-World's ``peg-insert-side-v3``.
 
 Usage::
@@ -35,7 +35,7 @@ over the envs (one env-step = one 0.25 s control step = 250 MuJoCo steps of 1 ms
    per-thread efficiency. Checked here by the measured ``t=K / t=1`` ratio of the table
    above at N = 2, 16, 64; the 16- and 64-core figures are that model, not measurements.
 
-3. **PPO wall time.** SB3 PPO (``tolins.learning.sb3.make_model``, SB3 defaults, dense
+3. **PPO wall time.** SB3 PPO (``tolins.learning.agents.sb3.make_model``, SB3 defaults, dense
    reward) on MuJoCo 2*2 with ``n_envs`` = 1 and 8 to ``--ppo-steps`` env steps, ``n_steps``
    = 2048 / n_envs so that every update sees the same 2,048 env steps and does the same
    gradient work; the two trainings alternate in chunks of 2 updates (torch on one thread).
@@ -331,9 +331,9 @@ def threads_model(rows: list[dict]) -> None:
 
 
 def ppo(budget: int, rollout: int, n_envs: tuple[int, ...]) -> None:
+    from tolins.learning.agents.sb3 import make_model
+    from tolins.learning.agents.sb3_config import Sb3Config
     from tolins.learning.artefacts import single_threaded_torch
-    from tolins.learning.sb3 import make_model
-    from tolins.learning.sb3_config import Sb3Config
 
     models, seconds, grad = {}, dict.fromkeys(n_envs, 0.0), dict.fromkeys(n_envs, 0.0)
     for n in n_envs:

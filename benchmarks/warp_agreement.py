@@ -40,8 +40,8 @@ import numpy as np
 
 import tolins
 from tolins import CircularSocket, PolygonSocket
-from tolins.envs.mujoco_batch import MujocoBatch
 from tolins.geometry.workspace import in_holes
+from tolins.physics.mujoco import MujocoBatch
 from tolins.policies import EXPERTS
 
 FAST = 2.5
@@ -63,7 +63,7 @@ def physics_vs_geometry():
 
 def batches(socket, n: int, device: str):
     """``{"mujoco": MujocoBatch, "warp": WarpBatch}`` of ``n`` copies of ``socket``."""
-    from tolins.envs.warp_batch import WarpBatch
+    from tolins.physics.warp import WarpBatch
 
     return {"mujoco": MujocoBatch(socket, n, 0.25), "warp": WarpBatch(socket, n, 0.25, device)}
 

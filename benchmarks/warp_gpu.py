@@ -53,7 +53,7 @@ def measure(socket_name: str, n: int, mode: str, steps: int, device: str) -> dic
     """One row: ``n`` worlds of ``socket_name`` in regime ``mode``."""
     import warp as wp
 
-    from tolins.envs.warp_batch import WarpBatch
+    from tolins.physics.warp import WarpBatch
 
     build = time.perf_counter()
     batch = WarpBatch(SOCKETS[socket_name], n, 0.25, device=device)

@@ -21,10 +21,10 @@ PACKAGE = "tolins"
 class Import:
     """One import of a tolins module by a file of tolins."""
 
-    path: str  # the importing file, relative to the package folder (``learning/actors.py``)
+    path: str  # the importing file, relative to the package folder (``learning/agents/actors.py``)
     line: int
-    importer: str  # the importing module (``tolins.learning.actors``)
-    target: str  # the module it imports (``tolins.learning.embedding``)
+    importer: str  # the importing module (``tolins.learning.agents.actors``)
+    target: str  # the module it imports (``tolins.learning.embedding.encoding``)
     typing_only: bool = False  # under ``if TYPE_CHECKING:``: for type checkers, never run
 
     def __str__(self) -> str:
@@ -33,12 +33,13 @@ class Import:
 
 def part(module: str) -> str:
     """The top-level part a module belongs to: ``tolins.learning`` for
-    ``tolins.learning.actors``, ``tolins.cli_checks`` for itself, ``tolins`` for the root."""
+    ``tolins.learning.agents.actors``, ``tolins.atomic`` for itself, ``tolins`` for the root."""
     return ".".join(module.split(".")[:2])
 
 
 def module_name(path: Path, root: Path) -> str:
-    """``tolins.learning.actors`` for ``root/learning/actors.py`` (``root``: the package)."""
+    """``tolins.learning.agents.actors`` for ``root/learning/agents/actors.py`` (``root``:
+    the package)."""
     parts = [PACKAGE, *path.relative_to(root).with_suffix("").parts]
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 

@@ -48,7 +48,7 @@ def random_rollout(
 def train_rs_gail_on_kinematic(policy, demos, out, config, env_id: str, **kwargs):
     """RS-GAIL from ``policy`` on ``env_id``'s kinematic backend, seed 0, no progress bar
     (``kwargs``: more keywords of ``train_rs_gail``)."""
-    from tolins.learning.rs_gail import Workpiece, train_rs_gail
+    from tolins.learning.imitation.rs_gail import Workpiece, train_rs_gail
 
     return train_rs_gail(
         policy,

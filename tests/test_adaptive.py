@@ -1,4 +1,4 @@
-"""π_φ*: a policy with probabilistic inference in the loop (issue 6 item 6), real MuJoCo."""
+"""π_φ*: a policy with probabilistic inference in the loop, real MuJoCo."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ def test_deterministic_for_a_seed() -> None:
 
 
 def test_defect_model_reports_a_blocked_hole_not_insertable_and_inserts_the_others() -> None:
-    """With the defect model the wrapper stops re-planning on a plugged hole (issue 22)."""
+    """With the defect model the wrapper stops re-planning on a plugged hole."""
     from tolins.inference.posterior import DefectModel
 
     model = DefectModel(0.12, pitch_sigma=0.02, burr_sigma=0.08, blocked_prior=0.1)

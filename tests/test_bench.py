@@ -5,15 +5,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import gymnasium
 import numpy as np
 import pytest
 
-from tolins.bench.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD
-from tolins.bench.config import BenchConfig
-from tolins.bench.results import read_results, row_entry
-from tolins.bench.runner import run_bench
-from tolins.bench.stages import MARKER, StageCache, stage_key
-from tolins.bench.table import ALL_ROW_IDS, PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
+from tolins.bench.pipeline.config import BenchConfig
+from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.store.cache import MARKER, StageCache, stage_key
+from tolins.bench.table.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD
+from tolins.bench.table.results import read_results, row_entry
+from tolins.bench.table.rows import ALL_ROW_IDS, PAPER, ROW_IDS, ROWS, TRAININGS, select_rows
 from tolins.cli import main
 from tolins.inference.study import METHODS
 from tolins.record import check_rrd
@@ -174,8 +175,8 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
     # 5 demonstration datasets, 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study, 5
-    # robustness stages: none ran again
-    assert len(again.cached) == 42
+    # robustness stages, π_n's trajectories: none ran again
+    assert len(again.cached) == 43
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     # the robustness table on MuJoCo: tests/test_bench_robustness.py
@@ -224,7 +225,7 @@ def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
 def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path, monkeypatch):
     """Interrupted after π_n's RS-GAIL checkpoint (before its stage finished), moved, resumed;
     moved again, every stage cached; the figures are those of an uninterrupted run."""
-    from tolins.learning import runs
+    from tolins.learning.imitation import runs
 
     def config(folder: str) -> BenchConfig:
         out = str(tmp_path / folder)
@@ -252,9 +253,12 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
     assert resumed.results == whole.results
 
     (tmp_path / "b").rename(tmp_path / "c")
-    again = quiet(config("c"))
+    with monkeypatch.context() as patch:  # the reports read the stages, they run no episode
+        patch.setattr(gymnasium, "make", lambda *_, **__: pytest.fail("an env was made"))
+        again = quiet(config("c"))
     assert sorted(again.cached) == sorted(again.stage_wall_s)  # every stage, none re-run
-    assert len(again.cached) == 6  # the demonstrations, bc, π_n, two evaluations, the study
+    # the demonstrations, bc, π_n, two evaluations, the study, π_n's trajectories
+    assert len(again.cached) == 7
     assert again.results == whole.results
     assert again.study == whole.study
     for name in ("results.json", "inference.json"):
@@ -262,7 +266,7 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
 
 
 def test_timeline_kinds_of_every_stage_name():
-    from tolins.bench.timeline import KINDS, stage_kind
+    from tolins.bench.pipeline.timeline import KINDS, stage_kind
 
     kinds = {
         "demos-Circle2x2-safe-seed0-0": "demonstrations",
@@ -273,3 +277,40 @@ def test_timeline_kinds_of_every_stage_name():
     }
     assert {name: stage_kind(name) for name in kinds} == kinds
     assert set(kinds.values()) == set(KINDS)
+
+
+#: The bench's parts in import order: a file may import its own part and those before it
+#: (``if TYPE_CHECKING:`` imports aside).
+BENCH_PARTS = {
+    "reference": 0,
+    "table": 1,
+    "store": 2,
+    "jobs": 3,
+    "reports": 4,
+    "pipeline": 5,
+    "evaluate": 6,
+}
+
+
+def test_the_bench_parts_import_downwards_only():
+    from import_graph import read_imports
+
+    root = Path(__file__).resolve().parents[1] / "tolins"
+
+    def part(module: str) -> str:
+        return module.split(".")[2]
+
+    inside = [
+        found
+        for found in read_imports(root)
+        if found.importer.startswith("tolins.bench.")
+        and found.target.startswith("tolins.bench.")
+        and not found.typing_only
+    ]
+    assert {part(found.importer) for found in inside} <= set(BENCH_PARTS)
+    upward = [
+        str(found)
+        for found in inside
+        if BENCH_PARTS[part(found.target)] > BENCH_PARTS[part(found.importer)]
+    ]
+    assert not upward, "bench imports against its parts' order:\n" + "\n".join(upward)

@@ -10,12 +10,12 @@ import pytest
 
 pytest.importorskip("minari")
 
-from tolins.bench.config import BenchConfig
-from tolins.bench.profiles import PROFILES
-from tolins.bench.runner import run_bench
-from tolins.bench.table import CIRCLE_2X2, CIRCLE_2X8
-from tolins.learning import runs
-from tolins.learning.policy import load_policy
+from tolins.bench.pipeline.config import BenchConfig
+from tolins.bench.pipeline.profiles import PROFILES
+from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.table.rows import CIRCLE_2X2, CIRCLE_2X8
+from tolins.learning.imitation import runs
+from tolins.learning.imitation.policy import load_policy
 
 
 def _stage(out, prefix):

@@ -5,6 +5,7 @@ two expert rows on the kinematic backend)."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -14,9 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tolins.bench.config import EPISODES, RECORDING, BenchConfig
-from tolins.bench.runner import run_bench
-from tolins.bench.stages import MARKER
+from tolins.bench.jobs.row_evaluation import EPISODES, RECORDING
+from tolins.bench.pipeline.config import BenchConfig
+from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.store.cache import MARKER
 from tolins.cli import main
 
 ROWS = "C1.1,C2.1"
@@ -51,7 +53,7 @@ def _stage(out: Path, name: str = "eval-C2.1-seed0") -> Path:
 
 def _rewrite_digests(folder: Path) -> None:
     """What an editor that knew the scheme would do: the digests made to fit the files."""
-    from tolins.bench.integrity import folder_digests
+    from tolins.bench.store.integrity import folder_digests
 
     marker = json.loads((folder / MARKER).read_text())
     marker["files"] = folder_digests(folder, skip=(MARKER,))
@@ -127,7 +129,7 @@ def test_a_truncated_recording_is_not_copied_into_recordings(finished, tmp_path)
 
 
 def test_a_truncated_json_or_npy_names_the_file(tmp_path):
-    from tolins.bench.integrity import read_array, read_json
+    from tolins.bench.store.integrity import read_array, read_json
 
     (tmp_path / "a.json").write_text('{"rows": ')
     with pytest.raises(ValueError, match=r"a\.json: not JSON"):
@@ -138,13 +140,32 @@ def test_a_truncated_json_or_npy_names_the_file(tmp_path):
         read_array(tmp_path / "m.npy")
 
 
+def test_the_trajectories_stage_file_is_read_back_checked(tmp_path):
+    from tolins.bench.jobs.trajectories import TRAJECTORIES, read_trajectories
+    from tolins.bench.store.integrity import StageFileError
+
+    path = tmp_path / TRAJECTORIES
+    poses = [[1.0, 2.0, 0.0, 3.0], [0.5, 1.0, 0.0, 2.0]]
+    path.write_text(json.dumps({"trajectories": [{"label": "expert (safe)", "poses": poses}]}))
+    assert read_trajectories(tmp_path)["expert (safe)"].tolist() == poses
+    for bad in (
+        [poses],
+        {"trajectories": {"expert (safe)": poses}},
+        {"trajectories": [{"label": "expert (safe)", "poses": [[1.0, 2.0]]}]},
+        {"trajectories": [{"label": 3, "poses": poses}]},
+    ):
+        path.write_text(json.dumps(bad))
+        with pytest.raises(StageFileError, match=re.escape(str(path))):
+            read_trajectories(tmp_path)
+
+
 def test_a_second_bench_on_one_out_names_the_process_holding_it(tmp_path, capsys):
     out = tmp_path / "held"
     holder = subprocess.Popen(
         [
             sys.executable,
             "-c",
-            "import sys, time; from tolins.bench.lock import locked_folder\n"
+            "import sys, time; from tolins.bench.pipeline.lock import locked_folder\n"
             "with locked_folder(sys.argv[1]):\n    print('held', flush=True); time.sleep(60)",
             str(out),
         ],
@@ -162,7 +183,7 @@ def test_a_second_bench_on_one_out_names_the_process_holding_it(tmp_path, capsys
         holder.kill()
         holder.wait()
     time.sleep(0.1)
-    from tolins.bench.lock import locked_folder
+    from tolins.bench.pipeline.lock import locked_folder
 
     with locked_folder(out):  # released when its holder died
         pass
@@ -231,7 +252,7 @@ def test_compare_json_to_a_folder_is_refused_before_any_work(finished, tmp_path,
 def test_rows_of_runs_that_measured_something_else_are_not_comparable(
     finished, tmp_path, capsys, edit, why
 ):
-    from tolins.bench.compare import compare
+    from tolins.bench.table.compare import compare
 
     good = _results(finished, tmp_path, "good.json")
     other = _results(finished, tmp_path, "other.json", edit)

@@ -1,4 +1,5 @@
-"""The bench's robustness table (tolins.bench.robustness): tiny runs end to end, cached."""
+"""The bench's robustness table (tolins.bench.table.robustness, its stages in
+tolins.bench.jobs.robustness): tiny runs end to end, cached."""
 
 from __future__ import annotations
 
@@ -7,13 +8,16 @@ from dataclasses import replace
 
 import pytest
 
-from tolins.bench import robustness
-from tolins.bench.config import BenchConfig
-from tolins.bench.evaluation import eval_seeds, evaluate_row
-from tolins.bench.profiles import PROFILES
-from tolins.bench.robustness import CONDITIONS, KEY, POLICIES
-from tolins.bench.runner import run_bench
-from tolins.bench.table import ROWS
+from tolins.bench.jobs import robustness
+from tolins.bench.jobs.row_evaluation import evaluate_row
+from tolins.bench.pipeline.config import BenchConfig
+from tolins.bench.pipeline.profiles import PROFILES
+from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.pipeline.settings import robustness_spec
+from tolins.bench.reports.robustness import plot_robustness
+from tolins.bench.table.robustness import CONDITIONS, KEY, POLICIES
+from tolins.bench.table.rows import ROWS
+from tolins.bench.table.seeds import eval_seeds
 from tolins.cli import main
 
 TINY = PROFILES["tiny"]
@@ -43,7 +47,8 @@ def test_conditions_are_the_grades_the_defect_kinds_and_random_physics():
 
 def test_the_stage_key_sees_the_trained_policy_and_the_episodes():
     def config(stage, profile=TINY):
-        return robustness.stage_config(POLICIES[2], 0, stage, profile, "mujoco")
+        spec = robustness_spec(POLICIES[2], 0, stage, profile, "mujoco")
+        return robustness.robustness_stage(spec).config
 
     assert config("pi_n_safe-seed0-aaa") != config("pi_n_safe-seed0-bbb")
     assert config("x")["seeds"] == eval_seeds(0, TINY.robustness_episodes)
@@ -104,15 +109,17 @@ def test_only_the_experts_when_the_rows_train_no_circle_policy_and_cis_over_seed
 
 def test_an_expert_on_mujoco_fails_blocked_holes_and_repeats_its_row(tmp_path):
     safe = POLICIES[0]
-    folder = robustness.robustness_stage(tmp_path, safe, 0, TINY, "mujoco", None)
-    episodes = robustness._stage_episodes(folder, TINY.robustness_episodes)
+    stage = robustness.robustness_stage(robustness_spec(safe, 0, None, TINY, "mujoco"))
+    folder = robustness.robustness_job(tmp_path, stage, None)
+    episodes = robustness.read_stage(folder, TINY.robustness_episodes)
     assert [e.success for e in episodes["blocked"]] == [False] * TINY.robustness_episodes
     row = next(r for r in ROWS if r.id == "C2.1")
     expected = evaluate_row(row, None, "mujoco", eval_seeds(0, TINY.robustness_episodes))
     assert [e.reward for e in episodes["fit200"]] == pytest.approx([e.reward for e in expected])
-    again = robustness.robustness_stage(tmp_path, safe, 0, TINY, "mujoco", None)
+    again = robustness.robustness_job(tmp_path, stage, None)
     assert again == folder
-    results = robustness.robustness_results({robustness.stage_name(safe, 0): folder}, TINY, 1)
+    count = TINY.robustness_episodes
+    results = robustness.robustness_results({robustness.stage_name(safe, 0): folder}, count, 1)
     assert list(results["cells"]) == ["safe"]
-    path = robustness.plot_robustness(tmp_path / "robustness.png", results)
+    path = plot_robustness(tmp_path / "robustness.png", results)
     assert _png_size(path) > 0

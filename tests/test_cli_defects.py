@@ -71,7 +71,7 @@ def test_compare_refuses_impossible_figures_naming_file_row_and_field(
 
 def test_the_shipped_references_hold_possible_figures_only():
     from tolins.bench.reference import reference_names
-    from tolins.bench.results import read_results
+    from tolins.bench.table.results import read_results
 
     for name in reference_names():
         assert read_results(reference_path(name))["rows"]
@@ -83,7 +83,7 @@ def test_the_shipped_references_hold_possible_figures_only():
 @pytest.fixture
 def no_training(monkeypatch):
     """Any training the command would start fails the test at once."""
-    from tolins.learning import runs
+    from tolins.learning.imitation import runs
 
     def started(*_, **__):
         raise AssertionError("a training started")
@@ -201,7 +201,7 @@ def test_version_prints_the_installed_version(capsys):
 
 
 def test_the_agents_doc_names_the_schema_evaluate_writes():
-    from tolins.bench.results import SCHEMA
+    from tolins.bench.table.results import SCHEMA
 
     doc = (ROOT / "docs" / "agents.md").read_text()
     named = set(re.findall(r"tolins\.results/\d+", doc))
@@ -230,7 +230,7 @@ STAGES = {
 
 
 def test_progress_counts_every_stage_names_the_current_one_and_estimates_the_rest():
-    from tolins.bench.progress import BenchProgress
+    from tolins.bench.pipeline.progress import BenchProgress
 
     clock = _Clock()
     cached = {"demos-Circle2x2-safe-seed0-0"}
@@ -268,7 +268,7 @@ def test_progress_counts_every_stage_names_the_current_one_and_estimates_the_res
 
 
 def test_progress_draws_one_bar_with_the_stage_and_the_time_left(capsys):
-    from tolins.bench.progress import BenchProgress
+    from tolins.bench.pipeline.progress import BenchProgress
 
     clock = _Clock()
     with BenchProgress(STAGES, show=True, clock=clock, refresh_s=None) as progress:
@@ -281,8 +281,8 @@ def test_progress_draws_one_bar_with_the_stage_and_the_time_left(capsys):
 
 
 def test_expected_costs_follow_the_budgets_and_the_measured_reference_run():
-    from tolins.bench.profiles import PROFILES
-    from tolins.bench.progress import expected_cost
+    from tolins.bench.pipeline.profiles import PROFILES
+    from tolins.bench.pipeline.progress import expected_cost
 
     quick = PROFILES["quick"]
     record = json.loads(reference_path("quick").with_name("run.json").read_text())
@@ -300,8 +300,8 @@ def test_expected_costs_follow_the_budgets_and_the_measured_reference_run():
 
 
 def test_a_bench_run_shows_one_bar_over_its_stages(tmp_path, capsys):
-    from tolins.bench.config import BenchConfig
-    from tolins.bench.runner import run_bench
+    from tolins.bench.pipeline.config import BenchConfig
+    from tolins.bench.pipeline.runner import run_bench
 
     out = tmp_path / "bench"
     config = BenchConfig(

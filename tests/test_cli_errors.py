@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from tolins import cli_checks
 from tolins.cli import build_parser, main
+from tolins.cli import checks as cli_checks
 from tolins.envs.tasks import GENERIC_ID, TASKS
 
 ENV = TASKS[1].gym_id
@@ -103,7 +103,8 @@ def test_record_names_the_ids_it_supports(folder, capsys):
 
 
 def test_the_checkpoint_name_is_rs_gails():
-    from tolins.learning import rs_gail, train_cli
+    from tolins.cli import train as train_cli
+    from tolins.learning.imitation import rs_gail
 
     assert train_cli.CHECKPOINT == rs_gail.CHECKPOINT
 
@@ -147,9 +148,9 @@ def test_an_interrupted_command_exits_130_without_a_traceback(folder, capsys, mo
 @pytest.mark.parametrize("seed", [-1, 2**32, 1.5, True, "0"])
 def test_configs_refuse_the_seeds_the_cli_refuses(seed):
     from tolins.inference.study import StudyConfig
-    from tolins.learning.embedding_config import EmbeddingTrainConfig
-    from tolins.learning.policy_config import TaskConfig
-    from tolins.learning.sb3_config import Sb3Config
+    from tolins.learning.agents.sb3_config import Sb3Config
+    from tolins.learning.embedding.config import EmbeddingTrainConfig
+    from tolins.learning.imitation.config import TaskConfig
 
     makers = [
         lambda s: TaskConfig(seed=s),

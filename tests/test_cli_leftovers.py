@@ -1,4 +1,4 @@
-"""CLI cases of issue 23: a user policy's exceptions reported as the policy's, replay's step
+"""CLI edge cases: a user policy's exceptions reported as the policy's, replay's step
 and time checked, diverged training refused, sizes and seeds bounded, repeated options
 added up, torch's advice replaced by one line, dead processes' temporaries removed."""
 
@@ -108,7 +108,7 @@ def test_a_diverged_embedding_training_is_refused_and_writes_nothing(tmp_path, c
 
 
 def test_hidden_sizes_are_bounded(tmp_path, capsys):
-    from tolins.learning.policy_config import HIDDEN_MAX, ResidualConfig, RSGailConfig
+    from tolins.learning.imitation.config import HIDDEN_MAX, ResidualConfig, RSGailConfig
 
     argv = ["train", "bc", "--env", ENV, "--backend", "kinematic", "--hidden", "1000000000"]
     assert main([*argv, "--out", str(tmp_path / "bc")]) == 2
@@ -120,7 +120,7 @@ def test_hidden_sizes_are_bounded(tmp_path, capsys):
 
 
 def test_bench_seeds_are_bounded(tmp_path, capsys):
-    from tolins.bench.config import SEEDS_MAX
+    from tolins.bench.pipeline.config import SEEDS_MAX
 
     out = tmp_path / "b"
     assert main(["bench", "--seeds", str(SEEDS_MAX + 1), "--out", str(out)]) == 2

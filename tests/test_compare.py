@@ -8,11 +8,18 @@ import shutil
 
 import pytest
 
-from tolins.bench.claims import HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD, ONE_SEED, check_claims
-from tolins.bench.compare import A_HIGHER, B_HIGHER, CONSISTENT, compare, format_comparison
 from tolins.bench.reference import reference_names, reference_path
-from tolins.bench.results import read_results
-from tolins.bench.statistics import EPISODES, ONE_SEED_MARGIN, SEEDS, sign
+from tolins.bench.table.claims import (
+    HELD,
+    INCONCLUSIVE,
+    NOT_EVALUATED,
+    NOT_HELD,
+    ONE_SEED,
+    check_claims,
+)
+from tolins.bench.table.compare import A_HIGHER, B_HIGHER, CONSISTENT, compare, format_comparison
+from tolins.bench.table.results import read_results
+from tolins.bench.table.statistics import EPISODES, ONE_SEED_MARGIN, SEEDS, sign
 from tolins.cli import main
 
 ROWS = "C2.1,C2.2,C2.3,C3.1,C3.2"

@@ -1,6 +1,6 @@
-"""Issue 19: lazy sensors and explicit contact pairs change nothing, bit for bit.
+"""Lazy sensors and explicit contact pairs change nothing, bit for bit.
 
-The control step before issue 19 (pins colliding through MuJoCo's bounding-volume
+The eager-sensor control step (pins colliding through MuJoCo's bounding-volume
 trees, sensors computed in every physics step) is stepped side by side with today's
 (sensors only before each read, ``ServoStepper.lazy_sensors``) and with the opt-in
 ``make_mjcf(spec, contact_pairs=True)`` (explicit pin-piece ``<pair>``s) through the
@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from tolins import CircularSocket, PolygonSocket, make_mjcf, sample_defects
-from tolins.envs.mujoco_backend import ServoStepper
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW, pin_axes
 from tolins.mjcf.contacts import pin_reach_boxes
 from tolins.paper import A_MAX
+from tolins.physics.servo import ServoStepper
 from tolins.policies.experts import EfficientExpert, SafeExpert
 
 SUBSTEPS = 250

@@ -23,9 +23,9 @@ from tolins.datasets import (  # noqa: E402
     write_dataset,
 )
 from tolins.geometry.specs import CircularSocket  # noqa: E402
-from tolins.learning.actors import make_actor  # noqa: E402
-from tolins.learning.demonstrations import collect  # noqa: E402
-from tolins.learning.runs import trained_bc  # noqa: E402
+from tolins.learning.agents.actors import make_actor  # noqa: E402
+from tolins.learning.imitation.demonstrations import collect  # noqa: E402
+from tolins.learning.imitation.runs import trained_bc  # noqa: E402
 
 NAME = "tolins/test/mixed-v0"
 
@@ -206,7 +206,7 @@ def _train(argv, out):
 
 def test_bc_from_a_safe_expert_dataset_equals_todays_pi_bc(tmp_path, capsys):
     """Same seed, same demonstrations: ``--demos`` gives π_bc bit for bit."""
-    from tolins.learning.policy import load_policy
+    from tolins.learning.imitation.policy import load_policy
 
     env = "tolins/Circle2x2-v1"
     _write(tmp_path / "datasets", env, ["safe"], 6, "kinematic", seed=1)
@@ -233,7 +233,7 @@ def test_train_refuses_a_dataset_of_another_env_before_any_work(tmp_path, capsys
 
 def test_rs_gail_from_a_safe_expert_dataset_equals_todays(tmp_path):
     """RS-GAIL (BC start and discriminator) from the dataset: the same π_n bit for bit."""
-    from tolins.learning.policy import load_policy
+    from tolins.learning.imitation.policy import load_policy
 
     env = "tolins/Circle2x2-v1"
     _write(tmp_path / "datasets", env, ["safe"], 4, "kinematic", seed=2)

@@ -1,4 +1,4 @@
-"""Inference with the defect model: pitch error, burrs and blocked holes (issue 22)."""
+"""Inference with the defect model: pitch error, burrs and blocked holes."""
 
 from __future__ import annotations
 
@@ -175,9 +175,9 @@ def test_physics_study_per_kind() -> None:
 
 
 def test_bench_study_stage_reports_the_kinds() -> None:
-    from tolins.bench.profiles import PROFILES
-    from tolins.bench.runner import _study
+    from tolins.bench.pipeline.profiles import PROFILES
+    from tolins.bench.pipeline.settings import study_settings
 
-    quick = _study(PROFILES["quick"], "mujoco")
+    quick = study_settings(PROFILES["quick"], "mujoco")
     assert quick.kinds == ("bent", "pitch", "burr", "blocked") and quick.kind_samples == 12
-    assert _study(PROFILES["tiny"], "mujoco").kind_samples <= PROFILES["tiny"].study_samples
+    assert study_settings(PROFILES["tiny"], "mujoco").kind_samples <= PROFILES["tiny"].study_samples

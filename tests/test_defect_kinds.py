@@ -1,4 +1,4 @@
-"""Defect kinds beyond bent pins (issue 22): pitch error, burred, short pins, blocked holes.
+"""Defect kinds beyond bent pins: pitch error, burred, short pins, blocked holes.
 
 Each kind's geometry is checked against a computation from the spec's numbers alone (not
 through ``pin_centers`` or the tolerance module), then in MuJoCo: a pitch error moves

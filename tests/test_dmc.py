@@ -14,9 +14,9 @@ from dm_env import StepType, test_utils
 import tolins
 from tolins import dmc
 from tolins.envs import TASKS, InsertionEnv
-from tolins.envs.mujoco_backend import ServoStepper
 from tolins.envs.tasks import GRADE_TASKS, PRESETS
 from tolins.paper import A_MAX, HORIZON, SUCCESS_REWARD
+from tolins.physics.servo import ServoStepper
 
 DOWN = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
 TASK_BY_DOMAIN = {task.domain: task for task in PRESETS}

@@ -11,12 +11,12 @@ import pytest
 import torch
 
 from tolins import CircularSocket, PolygonSocket, embedding, sample_defects, tolerance
-from tolins.config_args import add_config_arguments, config_from_args, field_docs
-from tolins.learning.autoencoder import Architecture, ToleranceAutoencoder
-from tolins.learning.checkpoint import load_checkpoint, save_checkpoint
-from tolins.learning.embedding_config import EmbeddingTrainConfig
-from tolins.learning.embedding_eval import held_out_specs, measure
-from tolins.learning.embedding_train import train_embedding
+from tolins.cli.args import add_config_arguments, config_from_args, field_docs
+from tolins.learning.embedding.autoencoder import Architecture, ToleranceAutoencoder
+from tolins.learning.embedding.checkpoint import load_checkpoint, save_checkpoint
+from tolins.learning.embedding.config import EmbeddingTrainConfig
+from tolins.learning.embedding.evaluation import held_out_specs, measure
+from tolins.learning.embedding.train import train_embedding
 
 # Reported in docs/embedding.md for 500 held-out workpieces per family: IoU 0.997 and
 # 0.996, θ error 0.0015 and 0.0047 rad. The test scores the first 60 of them, so its

@@ -11,11 +11,11 @@ import pytest
 
 from tolins import CircularSocket, PolygonSocket, embedding, tolerance
 from tolins.envs.tasks import GRADE_TASKS, TASKS
-from tolins.learning.checkpoint import load_checkpoint, save_checkpoint
-from tolins.learning.embedding_config import EmbeddingTrainConfig
-from tolins.learning.embedding_eval import held_out_specs, measure
-from tolins.learning.embedding_train import train_embedding
-from tolins.learning.ranges import GRADED_RANGES, RANGES
+from tolins.learning.embedding.checkpoint import load_checkpoint, save_checkpoint
+from tolins.learning.embedding.config import EmbeddingTrainConfig
+from tolins.learning.embedding.evaluation import held_out_specs, measure
+from tolins.learning.embedding.ranges import GRADED_RANGES, RANGES
+from tolins.learning.embedding.train import train_embedding
 
 #: ``encode(task.socket)`` of the paper's presets with the shipped checkpoints (float.hex of
 #: each value, computed on an Intel CPU): the paper's policies were trained on these.

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import tolins
-from tolins.envs.mujoco_batch import MujocoBatch
 from tolins.geometry.defects import sample_defects
 from tolins.paper import CONTROL_DT
+from tolins.physics.mujoco import MujocoBatch
 
 ENV = "tolins/Circle2x2-v1"
 SOCKET = tolins.CircularSocket(2, 2)

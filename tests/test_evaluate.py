@@ -14,14 +14,15 @@ import pytest
 
 import tolins
 from tolins.bench import evaluate_policy
-from tolins.bench.evaluation import eval_seeds, evaluate_row
-from tolins.bench.results import SCHEMA, read_results, row_entry
-from tolins.bench.scoring import write_evaluation
-from tolins.bench.table import ROWS
+from tolins.bench.evaluate import write_evaluation
+from tolins.bench.jobs.row_evaluation import evaluate_row
+from tolins.bench.table.results import SCHEMA, read_results, row_entry
+from tolins.bench.table.rows import ROWS
+from tolins.bench.table.seeds import eval_seeds
 from tolins.cli import main
-from tolins.learning.actors import make_actor
-from tolins.learning.external import as_actor, load_sb3, sb3_algorithm
-from tolins.learning.policy import Policy, PolicyArchitecture, save_policy
+from tolins.learning.agents.actors import make_actor
+from tolins.learning.agents.external import as_actor, load_sb3, sb3_algorithm
+from tolins.learning.imitation.policy import Policy, PolicyArchitecture, save_policy
 from tolins.paper import A_MAX
 from tolins.policies.experts import SafeExpert
 

@@ -14,7 +14,8 @@ from tolins.demo import format_table, run_demo
 from tolins.envs import TASKS
 from tolins.paper import A_MAX
 from tolins.policies import EfficientExpert, SafeExpert
-from tolins.rollouts.episodes import Episode, run_episode, summarise
+from tolins.rollouts.episodes import Episode, run_episode
+from tolins.rollouts.summary import summarise
 
 
 def _summary(policy, gym_id: str = "tolins/Circle2x2-v1", episodes: int = 20):

@@ -10,10 +10,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from tolins.bench.results import SCHEMA, force_figures, read_results, row_entry
-from tolins.bench.table import ROWS
+from tolins.bench.table.results import SCHEMA, force_figures, read_results, row_entry
+from tolins.bench.table.rows import ROWS
 from tolins.policies import EXPERTS
-from tolins.rollouts.episodes import Episode, episode_from_dict, run_episode
+from tolins.rollouts.episodes import Episode, episode_from_dict, episode_to_dict, run_episode
 from tolins.rollouts.forces import FORCE_FIGURES, JAM_STEPS, ForceScores, ForceTracker
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
@@ -87,7 +87,7 @@ def test_the_vector_runner_gives_the_single_loops_force_scores(backend):
     for policy in (EXPERTS["efficient"](), _straight_down):
         single = [run_episode(env, policy, seed=s) for s in seeds]
         envs = VectorEnvCache(backend, num_envs=2)
-        batched = [e for _, e in run_jobs(envs, [Job(ENV, policy, s) for s in seeds])]
+        batched = run_jobs(envs, [Job(ENV, policy, s) for s in seeds])
         envs.close()
         assert batched == single
         assert all(e.forces is not None for e in batched)
@@ -150,9 +150,9 @@ def test_evaluate_prints_and_writes_the_force_figures(tmp_path, capsys):
 
 
 def test_the_force_table_and_panel_show_rows_that_have_the_figures(tmp_path):
-    from tolins.bench.force_table import format_force_table
-    from tolins.bench.plots import plot_table
-    from tolins.bench.table import PAPER
+    from tolins.bench.reports.plots import plot_table
+    from tolins.bench.table.force_table import format_force_table
+    from tolins.bench.table.rows import PAPER
 
     with_forces = row_entry(ROWS[0], [_episodes([1.0, 3.0])])
     without = row_entry(ROWS[1], [[Episode(1.0, True, 30, 0)]])
@@ -177,12 +177,11 @@ def test_the_profile_is_each_steps_depth_and_peak_force():
 
 
 def test_stage_episodes_with_forces_are_checked_on_reading(tmp_path):
-    from dataclasses import asdict
-
-    from tolins.bench.integrity import StageFileError, checked_episodes
+    from tolins.bench.store.integrity import StageFileError, checked_episodes
 
     episode = Episode(1.0, True, 2, 0, None, ForceScores(2.0, 1.5, 0.75, 0, 0.5), ((0.1, 1.0),) * 2)
-    rows = json.loads(json.dumps([asdict(episode), asdict(Episode(1.0, True, 30, 0))]))
+    rows = [episode_to_dict(e) for e in (episode, Episode(1.0, True, 30, 0))]
+    rows = json.loads(json.dumps(rows))
     assert checked_episodes(tmp_path, rows, 2)[0] == episode
     rows[0]["forces"]["impulse"] = -1.0
     with pytest.raises(StageFileError, match=r"forces\.impulse -1\.0; allowed: finite, ≥ 0"):
@@ -193,7 +192,7 @@ def test_stage_episodes_with_forces_are_checked_on_reading(tmp_path):
 
 
 def test_a_row_force_profile_is_drawn_from_its_episodes(tmp_path):
-    from tolins.bench.force_plot import plot_force_profile
+    from tolins.bench.reports.force_plot import plot_force_profile
 
     env = gym.make(ENV, backend="kinematic")
     episodes = [run_episode(env, p, seed=5) for p in (EXPERTS["efficient"](), _straight_down)]

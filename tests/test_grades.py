@@ -1,4 +1,4 @@
-"""Tolerance grades (issue 22): presets at 100, 50 and 20 µm whose physics step follows the
+"""Tolerance grades: presets at 100, 50 and 20 µm whose physics step follows the
 grade, and a few poses per grade that insert inside the clearance and are blocked just
 beyond its 5 % band (the full table: ``benchmarks/grades.py``)."""
 

@@ -1,4 +1,4 @@
-"""Probabilistic inference: posterior, goal search, study (issue 6)."""
+"""Probabilistic inference: posterior, goal search, study."""
 
 from __future__ import annotations
 

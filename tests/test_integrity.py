@@ -1,5 +1,5 @@
 """The benchmark cannot be scored without inserting: blind actions, bad poses and settings,
-steps after the end (issue 12)."""
+steps after the end."""
 
 from __future__ import annotations
 
@@ -16,11 +16,11 @@ import pytest
 import tolins
 from tolins import dmc
 from tolins.envs import InsertionEnv
-from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.envs.tasks import TASKS
 from tolins.geometry.workspace import PIN_LENGTH, in_holes, pin_axes, reach
 from tolins.mjcf import make_mjcf
 from tolins.paper import A_MAX, CONTROL_DT
+from tolins.physics.mujoco import MujocoBackend
 
 BACKENDS = ["mujoco", "kinematic"]
 SEEDS = range(10000, 10020)

@@ -12,9 +12,8 @@ from rollouts import push_down, random_rollout
 
 import tolins
 from tolins.envs import GENERIC_ID, TASKS, InsertionEnv
-from tolins.envs.kinematic_backend import KinematicBackend
-from tolins.envs.kinematic_batch import KinematicBatch
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON
+from tolins.physics.kinematic import KinematicBackend, KinematicBatch
 from tolins.policies.experts import EfficientExpert
 from tolins.tolerance import contains, extents
 

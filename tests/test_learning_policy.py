@@ -7,12 +7,12 @@ import pytest
 import torch
 
 from tolins import CircularSocket
-from tolins.learning.actors import make_actor
-from tolins.learning.bc import behaviour_clone
-from tolins.learning.demonstrations import collect, pairs
-from tolins.learning.discriminator import Discriminator
-from tolins.learning.policy import Policy, PolicyArchitecture, load_policy, save_policy
-from tolins.learning.policy_config import BCConfig, RSGailConfig
+from tolins.learning.agents.actors import make_actor
+from tolins.learning.imitation.bc import behaviour_clone
+from tolins.learning.imitation.config import BCConfig, RSGailConfig
+from tolins.learning.imitation.demonstrations import collect, pairs
+from tolins.learning.imitation.discriminator import Discriminator
+from tolins.learning.imitation.policy import Policy, PolicyArchitecture, load_policy, save_policy
 from tolins.paper import A_MAX
 from tolins.policies import SafeExpert
 

@@ -13,12 +13,12 @@ from rollouts import train_rs_gail_on_kinematic
 
 from tolins import __version__
 from tolins.cli import main
-from tolins.learning.bc import behaviour_clone
-from tolins.learning.demonstrations import collect
-from tolins.learning.policy import load_policy
-from tolins.learning.policy_config import BCConfig, ResidualConfig, RSGailConfig
-from tolins.learning.rs_gail import Workpiece
-from tolins.learning.tolerance_guided import train_tolerance_guided
+from tolins.learning.imitation.bc import behaviour_clone
+from tolins.learning.imitation.config import BCConfig, ResidualConfig, RSGailConfig
+from tolins.learning.imitation.demonstrations import collect
+from tolins.learning.imitation.policy import load_policy
+from tolins.learning.imitation.rs_gail import Workpiece
+from tolins.learning.imitation.tolerance_guided import train_tolerance_guided
 
 ENV = "tolins/Circle2x2-v1"
 TINY = {"popsize": 6, "episodes": 2, "eval_episodes": 4, "sigma0": 0.05}
@@ -157,7 +157,7 @@ def test_cli_train_writes_its_artefacts(tmp_path, monkeypatch, capsys):
     assert main(["train", "rs-gail", *common, *rs, *init, "--out", str(tmp_path / "rs")]) == 2
     assert main(["train", "rs-gail", *common, *rs, *init, "--out", str(tmp_path / "rs"),
                  "--resume"]) == 0  # fmt: skip
-    from tolins.learning import runs
+    from tolins.learning.imitation import runs
 
     def no_demonstrations(*_args, **_kwargs):
         raise AssertionError("demonstrations collected before the resume check")
@@ -204,7 +204,7 @@ def test_workpieces_carry_the_embedding_of_their_socket():
     import gymnasium as gym
 
     from tolins.embedding import encode
-    from tolins.learning.tolerance_guided import workpieces
+    from tolins.learning.imitation.tolerance_guided import workpieces
 
     (piece,) = workpieces(["tolins/Circle2x4-v1"])
     socket = gym.spec("tolins/Circle2x4-v1").kwargs["socket"]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import tolins  # noqa: F401  (registers the envs)
-from tolins.envs.randomization import DEFAULT_RANDOMIZATION, PhysicsRandomization
+from tolins.physics.randomization import DEFAULT_RANDOMIZATION, PhysicsRandomization
 
 ENV = "tolins/Circle2x2-v1"
 

@@ -20,15 +20,16 @@ import numpy as np
 import pytest
 import ray
 
-from tolins.bench.config import BenchConfig
-from tolins.bench.executor import RayExecutor
-from tolins.bench.runner import run_bench
+from tolins.bench.pipeline.config import BenchConfig
+from tolins.bench.pipeline.executor import RayExecutor
+from tolins.bench.pipeline.runner import run_bench
 from tolins.cli import main
-from tolins.learning.bc import behaviour_clone
-from tolins.learning.demonstrations import collect
-from tolins.learning.policy_config import BCConfig, RSGailConfig
-from tolins.learning.rs_gail import Workpiece, train_rs_gail
+from tolins.learning.imitation.bc import behaviour_clone
+from tolins.learning.imitation.config import BCConfig, RSGailConfig
+from tolins.learning.imitation.demonstrations import collect
+from tolins.learning.imitation.rs_gail import Workpiece, train_rs_gail
 from tolins.policies import EXPERTS
+from tolins.rollouts.collectors import Pairs
 from tolins.rollouts.pool import VectorPool
 from tolins.rollouts.ray_pool import RayPool
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
@@ -86,9 +87,9 @@ def test_a_vector_env_kept_between_runs_gives_a_fresh_ones_episodes():
     for env_id in ("tolins/Circle2x2-v1", "tolins/Circle2x1Defective-v1"):
         kept = VectorEnvCache("mujoco", num_envs=2, num_threads=2)
         run_jobs(kept, [Job(env_id, EXPERTS["safe"](), seed) for seed in (3, 4, 6)])
-        again = run_jobs(kept, [Job(env_id, EXPERTS["efficient"](), 5)])[0][0]
+        again = run_jobs(kept, [Job(env_id, EXPERTS["efficient"](), 5, (Pairs(),))])[0]
         fresh = VectorEnvCache("mujoco", num_envs=1, num_threads=1)
-        first = run_jobs(fresh, [Job(env_id, EXPERTS["efficient"](), 5)])[0][0]
+        first = run_jobs(fresh, [Job(env_id, EXPERTS["efficient"](), 5, (Pairs(),))])[0]
         assert np.array_equal(again.observations, first.observations), env_id
         assert (again.reward, again.collisions) == (first.reward, first.collisions)
         assert kept.env_ids == [env_id]
@@ -137,8 +138,9 @@ def test_ray_executor_gives_the_local_executors_results(local_ray, local_outputs
     stages = json.loads((tmp_path / "run.json").read_text())["stages"]
     assert set(stages) == set(run.stage_times)
     # 2 demonstration datasets (2*2, 2*8), 3 trainings (bc_safe, pi_n_safe, pi_phi_circle),
-    # 3 evaluations, the study, 5 robustness stages (tolins.bench.robustness)
-    assert len(stages) == 14
+    # 3 evaluations, the study, 5 robustness stages (tolins.bench.jobs.robustness), π_n's
+    # trajectories
+    assert len(stages) == 15
     assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
     assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -275,7 +277,7 @@ def test_the_local_executor_runs_without_importing_ray(tmp_path):
 
 
 def test_the_timeline_draws_the_stages_that_ran_on_their_workers(tmp_path):
-    from tolins.bench.timeline import plot_timeline, timeline_rows, worker_label
+    from tolins.bench.pipeline.timeline import plot_timeline, timeline_rows, worker_label
 
     local = {"node": None, "host": "vm", "pid": 7, "thread": "MainThread"}
     times = {

@@ -11,7 +11,7 @@ from rerun.chunk import RrdReader
 
 import tolins  # noqa: F401  (registers the env ids)
 from tolins.cli import main
-from tolins.learning.policy import Policy, PolicyArchitecture, save_policy
+from tolins.learning.imitation.policy import Policy, PolicyArchitecture, save_policy
 from tolins.rollouts.episodes import episode_poses
 
 

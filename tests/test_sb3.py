@@ -10,14 +10,14 @@ import pytest
 from stable_baselines3.common.env_checker import check_env
 
 import tolins
-from tolins.bench.baselines import env_step_curves
-from tolins.bench.claims import CLAIMS
-from tolins.bench.profiles import PROFILES
-from tolins.bench.table import BASELINE_ROWS, ROW_IDS, SB3_METHODS, select_rows
+from tolins.bench.pipeline.profiles import PROFILES
+from tolins.bench.table.baselines import env_step_curves
+from tolins.bench.table.claims import CLAIMS
+from tolins.bench.table.rows import BASELINE_ROWS, ROW_IDS, SB3_METHODS, select_rows
 from tolins.envs.wrappers import agent_env
-from tolins.learning.actors import make_actor
-from tolins.learning.sb3 import OBSERVATION_SCALE, make_model, train_sb3
-from tolins.learning.sb3_config import CURVES, MODEL, Sb3Config
+from tolins.learning.agents.actors import make_actor
+from tolins.learning.agents.sb3 import OBSERVATION_SCALE, make_model, train_sb3
+from tolins.learning.agents.sb3_config import CURVES, MODEL, Sb3Config
 from tolins.paper import A_MAX, HORIZON
 
 CIRCLE = "tolins/Circle2x2-v1"

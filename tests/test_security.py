@@ -19,7 +19,7 @@ from rollouts import train_rs_gail_on_kinematic
 
 import tolins
 from tolins.cli import main
-from tolins.learning.policy_config import BCConfig, RSGailConfig
+from tolins.learning.imitation.config import BCConfig, RSGailConfig
 
 ENV = "tolins/Circle2x2-v1"
 
@@ -44,8 +44,8 @@ def _payload(marker: Path) -> bytes:
 @pytest.fixture(scope="module")
 def interrupted(tmp_path_factory):
     """An RS-GAIL run interrupted after 2 of 4 iterations, and the same run uninterrupted."""
-    from tolins.learning.bc import behaviour_clone
-    from tolins.learning.demonstrations import collect
+    from tolins.learning.imitation.bc import behaviour_clone
+    from tolins.learning.imitation.demonstrations import collect
 
     demos = collect(ENV, "safe", 8, seed=0, backend="kinematic")
     start = behaviour_clone(demos, BCConfig(epochs=5, batch_size=64), seed=0).policy
@@ -116,8 +116,8 @@ def test_an_edited_cma_es_state_is_refused(interrupted, tmp_path):
 
 @pytest.mark.parametrize("kind", ["policy", "embedding"])
 def test_a_torch_checkpoint_with_a_pickled_object_is_refused_unrun(tmp_path, kind):
-    from tolins.learning.checkpoint import load_checkpoint
-    from tolins.learning.policy import load_policy
+    from tolins.learning.embedding.checkpoint import load_checkpoint
+    from tolins.learning.imitation.policy import load_policy
 
     marker = tmp_path / "ran"
     path = tmp_path / "planted.pt"
@@ -143,8 +143,8 @@ def test_evaluate_of_a_planted_policy_file_exits_2_unrun(tmp_path, capsys):
 
 def _sb3_zip(tmp_path: Path, algorithm: str) -> Path:
     pytest.importorskip("stable_baselines3")
-    from tolins.learning.sb3 import make_model
-    from tolins.learning.sb3_config import Sb3Config
+    from tolins.learning.agents.sb3 import make_model
+    from tolins.learning.agents.sb3_config import Sb3Config
 
     if algorithm in ("ppo", "sac"):  # tolins's: its observation scale in the network
         model = make_model(Sb3Config(algorithm, ENV, backend="kinematic", env_steps=10))
@@ -176,7 +176,7 @@ def _replace_data(path: Path, out: Path, edit) -> Path:
 
 @pytest.mark.parametrize("algorithm", ["ppo", "sac", "a2c", "td3"])
 def test_an_sb3_zip_loads_without_unpickling_and_acts_as_sb3s_load(tmp_path, algorithm):
-    from tolins.learning.external import load_sb3
+    from tolins.learning.agents.external import load_sb3
 
     marker = tmp_path / "ran"
     serialized = base64.b64encode(_payload(marker)).decode()
@@ -219,7 +219,7 @@ def test_policy_help_says_module_name_is_code(capsys):
 
 
 def test_a_pickled_npy_is_not_unpickled(tmp_path):
-    from tolins.bench.integrity import read_array
+    from tolins.bench.store.integrity import read_array
 
     marker = tmp_path / "ran"
     path = tmp_path / "means.npy"

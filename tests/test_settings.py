@@ -1,6 +1,6 @@
 """Every setting the env accepts works; every one it cannot honour is refused, naming it.
 
-Covers issue 23's "every accepted setting works" (control_dt on MuJoCo, success_depth,
+Covers "every accepted setting works" (control_dt on MuJoCo, success_depth,
 defect_sigma, non-numbers in distributions, noise and actions, a property-based test over
 ``gym.make`` keywords, sockets, reset options and actions), bit-identical copies of a
 MuJoCo env, and renderers closed at exit.
@@ -23,9 +23,8 @@ from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
 from tolins import dmc
-from tolins.envs.episode import MAX_NOISE_STD, TaskSettings
 from tolins.envs.initial_pose import InitialPoseDistribution
-from tolins.envs.mujoco_backend import MujocoBackend
+from tolins.envs.task_settings import MAX_NOISE_STD, TaskSettings
 from tolins.envs.tasks import DEFECT_SIGMA
 from tolins.geometry.defects import (
     MIN_VALID_SHARE,
@@ -35,6 +34,7 @@ from tolins.geometry.defects import (
 )
 from tolins.geometry.specs import CircularSocket, PolygonSocket
 from tolins.paper import A_MAX
+from tolins.physics.mujoco import MujocoBackend
 
 DOWN = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
 GENERIC = "tolins/Insert-v1"

@@ -9,7 +9,7 @@ import functools
 import numpy as np
 import pytest
 
-from tolins.bench.claims import (
+from tolins.bench.table.claims import (
     CLAIMS,
     HELD,
     INCONCLUSIVE,
@@ -18,8 +18,9 @@ from tolins.bench.claims import (
     ONE_SEED,
     check_claims,
 )
-from tolins.bench.results import row_entry
-from tolins.bench.statistics import (
+from tolins.bench.table.results import row_entry
+from tolins.bench.table.rows import ALL_ROWS, PAPER
+from tolins.bench.table.statistics import (
     EPISODES,
     ONE_SEED_MARGIN,
     SEEDS,
@@ -34,7 +35,6 @@ from tolins.bench.statistics import (
     training_spread,
     unit_samples,
 )
-from tolins.bench.table import ALL_ROWS, PAPER
 from tolins.rollouts.episodes import Episode
 
 BY_ID = {row.id: row for row in ALL_ROWS}

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import tolins
-from tolins.envs.episode import TaskSettings
 from tolins.envs.insertion_env import InsertionEnv
+from tolins.envs.task_settings import TaskSettings
 from tolins.envs.vector_views import SETTABLE, VIEW_ATTRIBUTES
 from tolins.policies import EXPERTS
 

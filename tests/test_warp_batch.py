@@ -24,8 +24,8 @@ from tolins import CircularSocket
 
 pytest.importorskip("mujoco_warp", reason="backend='warp' needs pip install 'tolins[warp]'")
 
-from tolins.envs.mujoco_batch import MujocoBatch
-from tolins.envs.warp_batch import WarpBatch
+from tolins.physics.mujoco import MujocoBatch
+from tolins.physics.warp import WarpBatch
 
 pytestmark = pytest.mark.slow
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"

@@ -8,8 +8,8 @@ from tqdm import tqdm
 
 from tolins.envs.tasks import TASKS
 from tolins.policies.experts import EXPERTS
-from tolins.rollouts.episodes import Summary, summarise
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
+from tolins.rollouts.summary import Summary, summarise
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,7 @@ def run_demo(
                 for expert in experts
                 for i in range(episodes)
             ]
-            results = [episode for _, episode in run_jobs(envs, jobs)]
+            results = run_jobs(envs, jobs)
             for k, expert in enumerate(experts):
                 mine = results[k * episodes : (k + 1) * episodes]
                 rows.append(DemoRow(task.gym_id, expert, summarise(mine)))

@@ -92,7 +92,7 @@ def main() -> None:
     run = os.path.join(args.out, "bc_tolins")
     tolins("train", "bc", "--env", ENV, "--backend", backend, "--epochs", str(args.epochs),
            "--demos", os.path.join(args.out, NAME), "--out", run)  # fmt: skip
-    from tolins.learning.actors import make_actor
+    from tolins.learning.agents.actors import make_actor
 
     pi_bc = make_actor(run, dataset.recover_environment().unwrapped.nominal_socket)
 

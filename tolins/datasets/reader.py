@@ -23,7 +23,7 @@ import numpy as np
 
 from tolins.datasets.envspec import tolins_ids
 from tolins.datasets.writer import UNITS
-from tolins.rollouts.episodes import Rollout
+from tolins.rollouts.episodes import Episode
 
 #: How to get Minari (the extra of :mod:`tolins.datasets`).
 INSTALL_DATA = "pip install 'tolins[data]'"
@@ -96,18 +96,20 @@ def check_dataset(dataset: Any, env_id: str | None, label: str) -> None:
         raise ValueError(f"--demos {label}: no episodes; allowed: a dataset with episodes")
 
 
-def to_rollout(episode: Any) -> Rollout:
-    """A Minari episode as the learners' :class:`~tolins.rollouts.episodes.Rollout`
-    (the ``T`` observations each action answered, the ``T`` actions)."""
+def to_rollout(episode: Any) -> Episode:
+    """A Minari episode as the learners' :class:`~tolins.rollouts.episodes.Episode` (the
+    ``T`` observations each action answered, the ``T`` actions; ``steps`` is ``T``)."""
     infos = episode.infos or {}
     success = infos["success"][-1] if "success" in infos else episode.terminations[-1]
     collisions = infos["n_collisions"][-1] if "n_collisions" in infos else 0
-    return Rollout(
-        np.asarray(episode.observations[:-1], dtype=np.float64),
-        np.asarray(episode.actions, dtype=np.float64),
-        float(np.sum(episode.rewards)),
-        bool(success),
-        int(collisions),
+    actions = np.asarray(episode.actions, dtype=np.float64)
+    return Episode(
+        reward=float(np.sum(episode.rewards)),
+        success=bool(success),
+        steps=len(actions),
+        collisions=int(collisions),
+        observations=np.asarray(episode.observations[:-1], dtype=np.float64),
+        actions=actions,
     )
 
 
@@ -181,7 +183,7 @@ def _reason(error: Exception) -> str:
     return f"{type(error).__name__}: {error}".splitlines()[0]
 
 
-def load_demonstrations(source: str | os.PathLike, env_id: str | None = None) -> list[Rollout]:
+def load_demonstrations(source: str | os.PathLike, env_id: str | None = None) -> list[Episode]:
     """Every episode of the dataset ``source`` (checked by :func:`open_dataset` and
     :func:`check_episode`), in order. Raises ``ValueError`` naming what is wrong."""
     dataset = open_dataset(source, env_id)

@@ -15,8 +15,8 @@ mixed              safe, efficient, bc, random in turn
 
 Datasets sit below learning, so the policies that need learning code come in from the
 caller: ``make_actor`` turns a name or file into a policy, and ``train_bc`` makes the ``bc``
-policy. ``tolins dataset`` passes :func:`tolins.learning.actors.make_actor` and
-:func:`tolins.learning.runs.trained_bc`, π_bc with the default configs and the dataset's
+policy. ``tolins dataset`` passes :func:`tolins.learning.agents.actors.make_actor` and
+:func:`tolins.learning.imitation.runs.trained_bc`, π_bc with the default configs and the dataset's
 seed (50 safe-expert episodes, 200 epochs): the same policy as
 ``tolins train bc --env ID --seed SEED --backend BACKEND``. It is trained when its first
 episode starts, so that a dataset's options are all checked before that work.

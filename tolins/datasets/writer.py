@@ -30,7 +30,8 @@ import numpy as np
 from tolins.datasets.envspec import dataset_env_spec, socket_to_json
 from tolins.datasets.sources import Source
 from tolins.datasets.target import claim_target, temporary_folder
-from tolins.envs.episode import check_action
+from tolins.rollouts.collectors import Transitions
+from tolins.rollouts.episodes import run_episode
 
 #: The ``info`` keys stored per step (every key of the env's info but ``error``).
 STEP_INFO = (
@@ -69,8 +70,8 @@ class EpisodeRecord:
 def episode_seeds(seed: int, episodes: int, stream: int = 0) -> list[int]:
     """The episode seeds of a dataset with ``seed``: the ones ``tolins train --seed SEED``
     draws for the demonstrations on its env number ``stream`` (0: the first;
-    :func:`tolins.learning.runs.demonstrations`), so that a safe-expert dataset of the same
-    seed holds the very same episodes."""
+    :func:`tolins.learning.imitation.runs.demonstrations`), so that a safe-expert dataset of
+    the same seed holds the very same episodes."""
     if not 0 <= stream < 1000:
         raise ValueError(f"stream={stream}; allowed: 0 <= stream < 1000 (an env's index)")
     state = np.random.SeedSequence([seed * 1000 + stream, 0xDE70]).generate_state(episodes)
@@ -82,36 +83,25 @@ def record_episode(env: gym.Env, policy: Callable, seed: int, name: str, index: 
     :class:`EpisodeRecord` with id ``index``."""
     from minari.data_collector import EpisodeBuffer
 
-    observation, info = env.reset(seed=seed)
+    steps = Transitions()
+    episode = run_episode(env, policy, seed, (steps,))
     socket = env.unwrapped.socket
-    observations, infos, actions, rewards, terms, truncs = [observation], [info], [], [], [], []
-    done = False
-    while not done:
-        action = check_action(policy(observation))
-        observation, reward, terminated, truncated, info = env.step(action)
-        for sequence, value in zip(
-            (observations, infos, actions, rewards, terms, truncs),
-            (observation, info, action, reward, terminated, truncated),
-            strict=True,
-        ):
-            sequence.append(value)
-        done = terminated or truncated
     buffer = EpisodeBuffer(
         id=index,
         seed=seed,
-        observations=np.array(observations),
-        actions=np.array(actions),
-        rewards=[float(r) for r in rewards],
-        terminations=[bool(t) for t in terms],
-        truncations=[bool(t) for t in truncs],
-        infos={key: np.array([step[key] for step in infos]) for key in STEP_INFO},
+        observations=np.array(steps.observations),
+        actions=np.array(steps.actions),
+        rewards=[float(r) for r in steps.rewards],
+        terminations=[bool(t) for t in steps.terminations],
+        truncations=[bool(t) for t in steps.truncations],
+        infos={key: np.array([step[key] for step in steps.infos]) for key in STEP_INFO},
     )
     offsets = getattr(socket, "offsets", np.zeros((socket.n_pins, 2)))
     metadata = {
         "policy": name,
         "socket": json.dumps(socket_to_json(socket)),
         "pin_offsets": np.asarray(offsets, dtype=float),
-        "error": str(info.get("error") or ""),
+        "error": episode.error or "",
     }
     return EpisodeRecord(buffer, metadata)
 

@@ -9,11 +9,11 @@ import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
-from tolins.envs.backend import BackendState
-from tolins.envs.mujoco_backend import ServoStepper
-from tolins.envs.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
+from tolins.physics.protocol import BackendState
+from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
+from tolins.physics.servo import ServoStepper
 
 
 class InsertionPhysics(dm_mujoco.Physics):
@@ -64,7 +64,7 @@ class InsertionPhysics(dm_mujoco.Physics):
 
     def set_physics(self, draw: PhysicsDraw | None) -> None:
         """Apply a randomised-physics ``draw`` to the model from its nominal values
-        (``None``: nominal; :mod:`tolins.envs.randomization`)."""
+        (``None``: nominal; :mod:`tolins.physics.randomization`)."""
         model = self.model.ptr
         if getattr(self, "_nominal_of", None) is not model:
             if draw is None:

@@ -10,13 +10,17 @@ from dm_control.utils import containers
 
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
-from tolins.envs.episode import check_control_dt
 from tolins.envs.tasks import PRESETS, Task
 from tolins.paper import CONTROL_DT
 
 TASK_NAME = "insert"
-#: Keywords ``task_kwargs`` may hold: those of :class:`Insert` but the domain's socket.
-TASK_KWARGS = tuple(name for name in inspect.signature(Insert).parameters if name != "socket")
+#: Keywords of :class:`Insert` that the suite sets itself: the domain's socket, and the
+#: control period, which is ``environment_kwargs["control_timestep"]`` (dm_control's name).
+_SET_BY_THE_SUITE = ("socket", "control_dt")
+#: Keywords ``task_kwargs`` may hold: those of :class:`Insert` but the ones the suite sets.
+TASK_KWARGS = tuple(
+    name for name in inspect.signature(Insert).parameters if name not in _SET_BY_THE_SUITE
+)
 
 
 def make_environment(
@@ -24,7 +28,9 @@ def make_environment(
     task_kwargs: dict[str, Any] | None = None,
     environment_kwargs: dict[str, Any] | None = None,
 ) -> control.Environment:
-    """A ``control.Environment`` of ``task`` (a row of the task table), 0.25 s control steps."""
+    """A ``control.Environment`` of ``task`` (a row of the task table), 0.25 s control steps
+    unless ``environment_kwargs["control_timestep"]`` says otherwise (validated by the task's
+    settings, as the gym env's ``control_dt``)."""
     task_kwargs = dict(task_kwargs or {})
     unknown = sorted(set(task_kwargs) - set(TASK_KWARGS))
     if unknown:
@@ -32,11 +38,10 @@ def make_environment(
     if task.defect_sigma is not None:
         task_kwargs.setdefault("defect_sigma", task.defect_sigma)
     environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
-    environment_kwargs["control_timestep"] = check_control_dt(
-        environment_kwargs["control_timestep"]
-    )
+    insert = Insert(task.socket, control_dt=environment_kwargs["control_timestep"], **task_kwargs)
+    environment_kwargs["control_timestep"] = insert.settings.control_dt
     physics = InsertionPhysics.from_spec(task.socket)
-    return control.Environment(physics, Insert(task.socket, **task_kwargs), **environment_kwargs)
+    return control.Environment(physics, insert, **environment_kwargs)
 
 
 def _domain_suite(task: Task) -> containers.TaggedTasks:

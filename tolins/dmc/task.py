@@ -5,18 +5,19 @@ from __future__ import annotations
 import collections
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from dm_control.rl import control
 from dm_env import specs
 
 from tolins.dmc.physics import InsertionPhysics
-from tolins.envs.backend import BackendState
-from tolins.envs.episode import NO_SCORE, EpisodeScore, TaskSettings, check_action
-from tolins.envs.initial_pose import InitialPoseDistribution, spread_pose
+from tolins.envs.actions import check_action
+from tolins.envs.episode_state import EpisodeState, check_fixed_pose
+from tolins.envs.initial_pose import InitialPoseDistribution
+from tolins.envs.scoring import NO_SCORE, EpisodeScore
+from tolins.envs.task_settings import TaskSettings
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.workspace import check_goal, check_pose
-from tolins.paper import A_MAX, HORIZON, POSE_NOISE_STD
+from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.physics.randomization import PhysicsDraw
 
 #: Observation names and sizes, in the order of the gym env's 8-vector.
 OBSERVATIONS = (("pose_error", 3), ("height", 1), ("wrench", 4))
@@ -69,7 +70,7 @@ class Insert(control.Task):
     ``pose`` below the board's top (pins in their holes) is for a nominal workpiece only:
     with ``defect_sigma`` it is refused, as a bent workpiece may not fit there.
     ``randomization`` draws the episode's physics as the gym env's does (after the
-    workpiece, before the pose; :mod:`tolins.envs.randomization`), applied to the physics'
+    workpiece, before the pose; :mod:`tolins.physics.randomization`), applied to the physics'
     model; the draw is :attr:`physics_draw`. ``defects=(kind, sigma)`` draws another kind
     of defect every episode, as the gym env's ``defects`` (after any bend;
     :func:`~tolins.geometry.defects.sample_defects`: ``pitch``, ``burr``, ``short``,
@@ -80,6 +81,14 @@ class Insert(control.Task):
     anything; if it raises (e.g. a ``pose`` set on the task since that is out of range),
     the task, its random state and the physics stay as they were, and every step raises
     ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+
+    **The rules are the gym env's**: :attr:`settings` is a
+    :class:`~tolins.envs.task_settings.TaskSettings` and :attr:`episode` an
+    :class:`~tolins.envs.episode_state.EpisodeState`, what ``InsertionEnv`` and every env
+    of the vector env hold; the task plans, starts and scores its episodes through them
+    and turns the outcome into dm_control's observation, reward and discount.
+    ``control_dt`` is the environment's ``control_timestep`` (s), validated by the settings
+    (:func:`tolins.dmc.make_environment` passes it).
     """
 
     def __init__(
@@ -98,6 +107,7 @@ class Insert(control.Task):
         reward_mode: str = "sparse",
         randomization: Any = None,
         defects: Any = None,
+        control_dt: float = CONTROL_DT,
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -109,87 +119,74 @@ class Insert(control.Task):
             collision_force=collision_force,
             defect_sigma=defect_sigma,
             initial_pose=initial_pose,
+            control_dt=control_dt,
             reward_mode=reward_mode,
             randomization=randomization,
             defects=defects,
         )
-        self.socket = socket
-        self.physics_draw = None
-        self.goal = check_goal(goal)
-        self.pose = None if pose is None else check_pose(socket, pose)
-        if self.pose is not None and self.pose[3] < 0:
-            for name, value in (("defect_sigma", defect_sigma), ("defects", defects)):
-                if value is not None:
-                    raise ValueError(
-                        f"pose={self.pose.tolist()!r} has the pins in the holes, which a "
-                        f"defective workpiece ({name}) may not fit; allowed with {name}: z ≥ 0"
-                    )
+        self.episode = EpisodeState(self.settings, goal)
+        self.pose = check_fixed_pose(self.settings, pose)
         self.random = _generator(random)
-        self.score = EpisodeScore(self.settings)
         self.last_score = NO_SCORE
         self.error: str | None = None
-        self._observation = np.zeros(8)
-        self._reset_failed = False
         super().__init__()
 
+    @property
+    def socket(self) -> SocketSpec:
+        """The workpiece of the current episode (a defective draw in a defective domain)."""
+        return self.episode.socket
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The goal ``[x*, y*, theta*]`` (mm, rad) ``pose_error`` is measured from; setting it
+        moves the running episode's goal and every later one's."""
+        return self.episode.goal
+
+    @goal.setter
+    def goal(self, value: Any) -> None:
+        self.episode.goal = value
+
+    @property
+    def score(self) -> EpisodeScore:
+        """The running episode's step and collision counts."""
+        return self.episode.score
+
+    @property
+    def physics_draw(self) -> PhysicsDraw | None:
+        """The episode's randomised physics (``None`` without ``randomization``)."""
+        return self.episode.physics
+
     def initialize_episode(self, physics: InsertionPhysics) -> None:
-        """Draw the workpiece (defective domain) and the initial pose, check them, then
-        place the workpiece; a failure changes nothing (see **Failed reset**)."""
+        """Plan the episode (draw the workpiece, the physics and the initial pose, and check
+        them), then rebuild or adjust the physics and place the workpiece; a failed plan
+        changes nothing, the random state included (see **Failed reset**)."""
         random_state = self.random.bit_generator.state
         try:
-            socket = self.settings.draw_socket(self.random)
-            draw = self.settings.draw_physics(self.random)
-            if self.pose is not None:
-                pose = check_pose(socket, self.pose)
-            else:
-                distribution = self.settings.initial_pose
-                if draw is not None and draw.pose_spread is not None:
-                    distribution = spread_pose(distribution, draw.pose_spread)
-                pose = check_pose(socket, distribution.sample(self.random, self.goal))
+            plan = self.episode.plan(self.random, pose=self.pose)
         except BaseException:
             self.random.bit_generator.state = random_state
-            self._reset_failed = True
             raise
-        if socket is not self.socket:
-            physics.reload_from_spec(socket)
-        self.socket, self.physics_draw = socket, draw
-        if self.settings.randomization is not None:
-            physics.set_physics(draw)
-        self.score.reset()
+        if plan.socket is not self.socket:
+            physics.reload_from_spec(plan.socket)
+        plan.apply_physics(physics.set_physics)
         self.last_score, self.error = NO_SCORE, None
-        self._observation = self._observe(physics.set_pose(pose))
-        self._reset_failed = False
+        self.episode.start(plan, physics.set_pose(plan.pose), self.random)
 
     def before_step(self, action: Any, physics: InsertionPhysics) -> None:
         """Check and clip ``action`` and command it; ``gymnasium.error.ResetNeeded`` after a
         failed reset."""
-        if self._reset_failed:
-            raise gym.error.ResetNeeded(
-                "the last reset failed; call reset() (after fixing what it raised) before stepping"
-            )
+        self.episode.check_running()
         physics.command(check_action(action))
 
     def after_step(self, physics: InsertionPhysics) -> None:
         """Score the control step that ``physics.step`` just ran."""
         state = physics.last_state
-        if state.error is not None:
-            self.error = state.error
-            self.last_score = self.score.fault()
-            return
-        self.last_score = self.score.score(state, self.socket)
-        self._observation = self._observe(state)
-
-    def _observe(self, state: BackendState) -> np.ndarray:
-        """The observation of ``state`` with the episode's drawn sensor bias and noise (as
-        the gym env's :class:`~tolins.envs.episode_state.EpisodeState`)."""
-        observation = self.settings.observe(state, self.goal, self.random)
-        if self.physics_draw is not None:
-            observation = self.physics_draw.observe(observation, self.random)
-        return observation
+        self.last_score = self.episode.record(state, self.random)
+        self.error = state.error
 
     def get_observation(self, physics: InsertionPhysics) -> Observation:
         """The last observation, split into ``pose_error``, ``height`` and ``wrench``."""
-        parts = np.split(self._observation, np.cumsum([n for _, n in OBSERVATIONS])[:-1])
+        parts = np.split(self.episode.observation, np.cumsum([n for _, n in OBSERVATIONS])[:-1])
         return collections.OrderedDict(
             (name, part.copy()) for (name, _), part in zip(OBSERVATIONS, parts, strict=True)
         )

@@ -1,31 +1,37 @@
-"""One env's running episode: what ``InsertionEnv`` and every slot of the vector env hold.
+"""One running episode of the insertion task: what every API of the task holds and calls.
 
-An :class:`EpisodeState` owns the episode's workpiece, goal, score and last observation,
-and turns the backend's :class:`~tolins.envs.backend.BackendState` into the gymnasium
-``(observation, reward, terminated, truncated, info)``. The simulator is not in it: the
-single env steps one backend, the vector env a batch (:mod:`tolins.envs.vector`), and
-both call the same methods in the same order with the env's own random generator, so an
-episode is the same bit for bit whichever runs it.
+An :class:`EpisodeState` owns the episode's workpiece, goal, score and last observation.
+``InsertionEnv``, every slot of the vector env (:mod:`tolins.envs.vector`) and the
+dm_control task (:class:`tolins.dmc.Insert`) each hold one and call the same methods in the
+same order with their own random generator, so an episode is the same bit for bit whichever
+runs it. The simulator is not in it: the caller steps its own (one backend, a batch, a
+dm_control physics) and hands over the resulting :class:`~tolins.physics.protocol.BackendState`.
 
-A reset is planned (:meth:`EpisodeState.plan`: every option validated, the workpiece and
-the pose drawn) before anything changes; a failed plan leaves the state as it was, marked
-broken, and stepping raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+* :meth:`EpisodeState.plan`: validate the reset and draw, in this order, the workpiece,
+  the physics and the initial pose (:class:`~tolins.envs.task_settings.TaskSettings`);
+  nothing changes yet, and a failed plan leaves the episode as it was, marked broken, so
+  that stepping raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+* :meth:`EpisodeState.start` (or :meth:`EpisodeState.begin`, with gymnasium's reset info):
+  the planned episode from the simulator's first state, and its first observation.
+* :meth:`EpisodeState.record` (or :meth:`EpisodeState.advance`, gymnasium's step tuple):
+  score a control step (:class:`~tolins.envs.scoring.EpisodeScore`) and observe its state.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from tolins.envs.backend import BackendState
-from tolins.envs.episode import NO_SCORE, EpisodeScore, StepScore, TaskSettings
-from tolins.envs.initial_pose import spread_pose
-from tolins.envs.randomization import PhysicsDraw
+from tolins.envs.scoring import NO_SCORE, EpisodeScore, StepScore
+from tolins.envs.task_settings import TaskSettings
 from tolins.geometry.specs import SocketSpec, workpiece_dict
 from tolins.geometry.workspace import check_goal, check_pose
+from tolins.physics.protocol import BackendState
+from tolins.physics.randomization import PhysicsDraw
 
 #: The keys ``reset(options=...)`` accepts; each applies to that reset's episode only.
 RESET_OPTIONS = ("pose", "goal")
@@ -40,6 +46,13 @@ class ResetPlan:
     goal: np.ndarray
     physics: PhysicsDraw | None = None
 
+    def apply_physics(self, set_physics: Callable[[PhysicsDraw], object]) -> None:
+        """Hand the episode's randomised physics to a simulator's ``set_physics`` (before
+        its reset). Without ``randomization`` nothing is drawn and the simulator keeps its
+        model as compiled."""
+        if self.physics is not None:
+            set_physics(self.physics)
+
 
 def check_options(options: dict[str, Any] | None) -> dict[str, Any]:
     """``options`` as a dict with known keys only (``ValueError`` otherwise)."""
@@ -53,6 +66,23 @@ def check_options(options: dict[str, Any] | None) -> dict[str, Any]:
             f"reset options {sorted(map(str, unknown))} are unknown; allowed: 'pose', 'goal'"
         )
     return options
+
+
+def check_fixed_pose(settings: TaskSettings, pose: object) -> np.ndarray | None:
+    """``pose`` ``[x, y, theta, z]`` as the initial pose of every episode (``None``: drawn),
+    valid for the nominal socket; one below the board's top (pins in their holes) is refused
+    when the episodes draw defective workpieces, which may not fit there."""
+    if pose is None:
+        return None
+    pose = check_pose(settings.socket, pose)
+    if pose[3] < 0:
+        for name in ("defect_sigma", "defects"):
+            if getattr(settings, name) is not None:
+                raise ValueError(
+                    f"pose={pose.tolist()!r} has the pins in the holes, which a defective "
+                    f"workpiece ({name}) may not fit; allowed with {name}: z ≥ 0"
+                )
+    return pose
 
 
 class EpisodeState:
@@ -85,9 +115,17 @@ class EpisodeState:
         self._goal = check_goal(value)
         self.episode_goal = self._goal
 
-    def plan(self, rng: np.random.Generator, options: dict[str, Any] | None) -> ResetPlan:
-        """Validate ``options`` and draw the next episode's workpiece and initial pose (in
-        that order, from ``rng``); ``ValueError`` leaves the episode as it was, broken."""
+    def plan(
+        self,
+        rng: np.random.Generator,
+        options: dict[str, Any] | None = None,
+        *,
+        pose: Any = None,
+    ) -> ResetPlan:
+        """Validate ``options`` and draw the next episode's workpiece, physics and initial
+        pose (in that order, from ``rng``); the pose is ``options["pose"]``, else ``pose``
+        (a fixed one, :func:`check_fixed_pose`), else drawn around the goal. ``ValueError``
+        leaves the episode as it was, broken."""
         try:
             options = check_options(options)
             goal = check_goal(options["goal"], "options['goal']") if "goal" in options else None
@@ -96,30 +134,36 @@ class EpisodeState:
             physics = self.settings.draw_physics(rng)
             if "pose" in options:
                 pose = check_pose(socket, options["pose"], "options['pose']")
+            elif pose is not None:
+                pose = check_pose(socket, pose)
             else:
-                distribution = self.settings.initial_pose
-                if physics is not None and physics.pose_spread is not None:
-                    distribution = spread_pose(distribution, physics.pose_spread)
+                distribution = self.settings.pose_distribution(physics)
                 pose = check_pose(socket, distribution.sample(rng, goal))
-        except Exception:
+        except BaseException:
             self.broken = True
             raise
         return ResetPlan(socket, pose, goal, physics)
 
-    def begin(
-        self, plan: ResetPlan, state: BackendState, rng: np.random.Generator
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Start the planned episode from the backend's ``state``: the first observation
-        and info (with ``info["workpiece"]``, the episode's socket as
-        :func:`~tolins.geometry.specs.workpiece_dict`: its defects' ground truth)."""
+    def start(self, plan: ResetPlan, state: BackendState, rng: np.random.Generator) -> np.ndarray:
+        """Start the planned episode from the simulator's first ``state``: its first
+        observation (a copy)."""
         self.socket, self.episode_goal, self.physics = plan.socket, plan.goal, plan.physics
         self.state, self.broken = state, False
         self.score.reset()
         self.observation = self._observe(state, rng)
+        return self.observation.copy()
+
+    def begin(
+        self, plan: ResetPlan, state: BackendState, rng: np.random.Generator
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """:meth:`start` with gymnasium's reset info (with ``info["workpiece"]``, the
+        episode's socket as :func:`~tolins.geometry.specs.workpiece_dict`: its defects'
+        ground truth, and ``info["physics"]`` with a physics draw)."""
+        observation = self.start(plan, state, rng)
         info = {**self.info(NO_SCORE), "workpiece": workpiece_dict(plan.socket)}
         if self.physics is not None:
             info["physics"] = self.physics.to_info()
-        return self.observation.copy(), info
+        return observation, info
 
     def _observe(self, state: BackendState, rng: np.random.Generator) -> np.ndarray:
         """The observation of ``state``, with the episode's drawn sensor bias and noise."""
@@ -134,7 +178,7 @@ class EpisodeState:
             raise gym.error.ResetNeeded("step() called before reset()")
         if self.broken:
             raise gym.error.ResetNeeded(
-                "the last reset() failed; call reset() with valid options before stepping"
+                "the last reset() failed; fix what it raised and call reset() before stepping"
             )
         self.score.check_running()
 
@@ -143,18 +187,27 @@ class EpisodeState:
         """Whether an episode has been started and has not ended (a broken one counts)."""
         return self.state is not None and not self.score.over
 
-    def advance(
-        self, state: BackendState, rng: np.random.Generator
-    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Score the control step that produced ``state``: gymnasium's step tuple."""
+    def record(self, state: BackendState, rng: np.random.Generator) -> StepScore:
+        """Score the control step that produced ``state`` and observe it; a simulator fault
+        (``state.error``) ends the episode without reward and keeps the last state and
+        observation."""
         if state.error is not None:
-            info = self.info(self.score.fault())
-            info["error"] = state.error
-            return self.observation.copy(), 0.0, False, True, info
+            return self.score.fault()
         self.state = state
         score = self.score.score(state, self.socket)
         self.observation = self._observe(state, rng)
-        info = self.info(score, score.success)  # the score's success is the state's
+        return score
+
+    def advance(
+        self, state: BackendState, rng: np.random.Generator
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """:meth:`record` as gymnasium's step tuple (``info["error"]`` after a fault)."""
+        score = self.record(state, rng)
+        if state.error is not None:
+            info = self.info(score)
+            info["error"] = state.error
+        else:
+            info = self.info(score, score.success)  # the score's success is the state's
         return self.observation.copy(), score.reward, score.success, score.truncated, info
 
     def info(self, score: StepScore, success: bool | None = None) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""The random initial pose of an episode."""
+"""The random initial pose of an episode: its distribution and the servo range it must keep."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tolins.geometry.validation import check_real
+from tolins.geometry.workspace import GOAL_RANGE, THETA_RANGE, XY_RANGE, Z_MAX
 
 
 @dataclass(frozen=True)
@@ -56,10 +57,35 @@ class InitialPoseDistribution:
 
 def spread_pose(distribution: InitialPoseDistribution, factor: float) -> InitialPoseDistribution:
     """``distribution`` with its horizontal offsets and theta range scaled by ``factor``
-    (the randomised initial-pose spread, :mod:`tolins.envs.randomization`)."""
+    (the randomised initial-pose spread, :mod:`tolins.physics.randomization`)."""
     return dataclasses.replace(
         distribution,
         radius_min=distribution.radius_min * factor,
         radius_max=distribution.radius_max * factor,
         theta_max=distribution.theta_max * factor,
     )
+
+
+def check_initial_pose(distribution: object) -> InitialPoseDistribution:
+    """``distribution`` (``None``: the default one) if it is an
+    :class:`InitialPoseDistribution` whose every pose around any allowed goal is in the
+    servo range."""
+    if distribution is None:
+        return InitialPoseDistribution()
+    if not isinstance(distribution, InitialPoseDistribution):
+        raise ValueError(
+            f"initial_pose={distribution!r} is not an InitialPoseDistribution; allowed: None "
+            "or InitialPoseDistribution(radius_min=..., ...)"
+        )
+    limits = (
+        ("radius_max", distribution.radius_max, XY_RANGE - GOAL_RANGE[0]),
+        ("theta_max", distribution.theta_max, THETA_RANGE - GOAL_RANGE[2]),
+        ("z_max", distribution.z_max, Z_MAX),
+    )
+    for name, value, limit in limits:
+        if value > limit:
+            raise ValueError(
+                f"initial_pose.{name}={value!r} reaches beyond the servo range; allowed: "
+                f"{name} ≤ {limit:.4g}"
+            )
+    return distribution

@@ -7,28 +7,26 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from tolins.envs.backend import Backend
-from tolins.envs.episode import TASK_KEYWORDS, TaskSettings, check_action, check_keywords
+from tolins.envs.actions import check_action
 from tolins.envs.episode_state import EpisodeState
 from tolins.envs.initial_pose import InitialPoseDistribution
-from tolins.envs.kinematic_backend import KinematicBackend
-from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
+from tolins.envs.task_settings import (
+    TASK_KEYWORDS,
+    SettingsAttributes,
+    TaskSettings,
+    check_keywords,
+)
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.physics import BACKENDS, Backend, make_backend, simulator
 
-#: Simulators by name: ``factory(spec, control_dt) -> Backend``.
-BACKENDS = {"mujoco": MujocoBackend, "kinematic": KinematicBackend}
+__all__ = ["BACKENDS", "ENV_KEYWORDS", "InsertionEnv"]
 #: Every keyword ``InsertionEnv`` takes.
 ENV_KEYWORDS = ("socket", "backend", "goal", "render_mode", *TASK_KEYWORDS)
 
 
-def _setting(name: str) -> property:
-    """A read-only attribute of the env's ``TaskSettings``."""
-    return property(lambda self: getattr(self.settings, name), doc=f"See ``TaskSettings.{name}``.")
-
-
-class InsertionEnv(gym.Env):
+class InsertionEnv(gym.Env, SettingsAttributes):
     """Insert a workpiece's pins into a socket's holes (the paper's task).
 
     **Task.** A workpiece with one or more pins starts above a board and must be
@@ -125,7 +123,7 @@ class InsertionEnv(gym.Env):
     :func:`~tolins.geometry.defects.sample_defects`); the episode's workpiece is the
     reset's ``info["workpiece"]``. ``randomization`` (``None`` by
     default: the paper's fixed physics; ``"default"``, a dict of ranges or a
-    :class:`~tolins.envs.randomization.PhysicsRandomization`) draws friction, contact
+    :class:`~tolins.physics.randomization.PhysicsRandomization`) draws friction, contact
     stiffness, servo gains and force limit, force-sensor bias and noise and the
     initial-pose spread per episode, after the workpiece and before the pose; the values
     are in the reset's ``info["physics"]``. ``reset`` validates every option before it
@@ -185,8 +183,7 @@ class InsertionEnv(gym.Env):
         **unknown: Any,
     ) -> None:
         check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
-        if backend not in BACKENDS:
-            raise ValueError(f"backend={backend!r}; allowed: {sorted(BACKENDS)}")
+        simulator(backend, single=True)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
         self.settings = TaskSettings(
@@ -208,22 +205,10 @@ class InsertionEnv(gym.Env):
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
-        self.backend: Backend | None = BACKENDS[backend](socket, self.control_dt)
+        self.backend: Backend | None = make_backend(backend, socket, self.control_dt)
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
         self._closed = False
-
-    nominal_socket = _setting("socket")
-    measurement_noise = _setting("measurement_noise")
-    force_noise = _setting("force_noise")
-    horizon = _setting("horizon")
-    success_depth = _setting("success_depth")
-    collision_force = _setting("collision_force")
-    defect_sigma = _setting("defect_sigma")
-    initial_pose = _setting("initial_pose")
-    reward_mode = _setting("reward_mode")
-    randomization = _setting("randomization")
-    defects = _setting("defects")
 
     @property
     def goal(self) -> np.ndarray:
@@ -247,10 +232,9 @@ class InsertionEnv(gym.Env):
         super().reset(seed=seed)
         plan = self._episode.plan(self.np_random, options)
         if plan.socket is not self.backend.spec:
-            self.backend = BACKENDS[self.backend_name](plan.socket, self.control_dt)
+            self.backend.set_socket(plan.socket)
             self._close_renderer()  # it draws the previous workpiece's model
-        if self.settings.randomization is not None and isinstance(self.backend, MujocoBackend):
-            self.backend.set_physics(plan.physics)
+        plan.apply_physics(self.backend.set_physics)
         return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

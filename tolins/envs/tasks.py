@@ -94,7 +94,7 @@ def _grade(task: Task, clearance_um: int) -> Task:
     )
 
 
-#: Tolerance grades (issue 22): the 2*2 and 2*8 sockets and the square and hexagon pegs at
+#: Tolerance grades: the 2*2 and 2*8 sockets and the square and hexagon pegs at
 #: radial clearances of 100, 50 and 20 µm (the paper's are 200, 200, 106 and 52 µm), the
 #: physics step following the grade (:data:`~tolins.mjcf.model.GRADE_TIMESTEPS`).
 GRADE_TASKS: tuple[Task, ...] = tuple(

@@ -2,8 +2,8 @@
 
 ``gymnasium.make_vec("tolins/Circle2x2-v1", num_envs=N, vectorization_mode=
 "vector_entry_point")`` and :func:`tolins.make_vec` build an :class:`InsertionVectorEnv`:
-one batched simulator (:mod:`tolins.envs.mujoco_batch` on ``mujoco.batch``'s thread pool,
-:mod:`tolins.envs.kinematic_batch` as numpy) under one
+one batched simulator (:mod:`tolins.physics`: MuJoCo on ``mujoco.batch``'s thread pool,
+the kinematic model as numpy, MuJoCo Warp) under one
 :class:`~tolins.envs.episode_state.EpisodeState` per env, which does what ``InsertionEnv``
 does with its own random generator (noise, reward, success, defect draws). Env ``i`` reset
 with seed ``s`` runs the episodes of ``gymnasium.make(id)`` reset with seed ``s``, bit for
@@ -24,17 +24,17 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
-from tolins.envs.batch import BatchPhysics
-from tolins.envs.episode import TASK_KEYWORDS, TaskSettings, check_action, check_keywords
+from tolins.envs.actions import check_action
 from tolins.envs.episode_state import RESET_OPTIONS, EpisodeState
 from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
+from tolins.envs.task_settings import TASK_KEYWORDS, TaskSettings, check_keywords
 from tolins.envs.vector_views import EnvView, check_name, check_value
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.paper import A_MAX
+from tolins.physics import SIMULATORS, BatchPhysics, make_batch, simulator
+from tolins.physics.registry import with_capability
 
-#: Batched simulators by name (``warp`` needs ``pip install 'tolins[warp]'``).
-BATCH_BACKENDS = ("mujoco", "kinematic", "warp")
 _AUTORESET = {mode.value: mode for mode in AutoresetMode}
 #: Every keyword ``InsertionVectorEnv`` takes.
 VECTOR_KEYWORDS = (
@@ -49,35 +49,7 @@ VECTOR_KEYWORDS = (
     *TASK_KEYWORDS,
 )
 #: The backends whose simulations can be drawn (``render_mode="rgb_array"``).
-DRAWABLE_BACKENDS = ("mujoco", "kinematic")
-
-
-def make_batch_physics(
-    backend: str,
-    socket: SocketSpec,
-    num_envs: int,
-    control_dt: float,
-    num_threads: int | None = None,
-    device: str | None = None,
-    persistent: bool = False,
-) -> BatchPhysics:
-    """The batched simulator ``backend`` of ``num_envs`` copies of ``socket`` (``persistent``:
-    MuJoCo's keeps every simulation's whole ``MjData``, for drawing)."""
-    if backend not in BATCH_BACKENDS:
-        raise ValueError(f"backend={backend!r}; allowed: {', '.join(map(repr, BATCH_BACKENDS))}")
-    if device is not None and backend != "warp":
-        raise ValueError(f"device={device!r} is for backend='warp' only; got backend={backend!r}")
-    if backend == "mujoco":
-        from tolins.envs.mujoco_batch import MujocoBatch
-
-        return MujocoBatch(socket, num_envs, control_dt, num_threads, persistent=persistent)
-    if backend == "kinematic":
-        from tolins.envs.kinematic_batch import KinematicBatch
-
-        return KinematicBatch(socket, num_envs, control_dt)
-    from tolins.envs.warp_batch import WarpBatch  # raises a clear ImportError without warp
-
-    return WarpBatch(socket, num_envs, control_dt, device=device or "cpu")
+DRAWABLE_BACKENDS = with_capability("supports_render")
 
 
 def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
@@ -240,24 +212,16 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.backend_name = backend
         self.metadata = {**self.metadata, "autoreset_mode": _AUTORESET[mode]}
         self.render_mode = render_mode
-        self.physics: BatchPhysics | None = make_batch_physics(
+        _check_capabilities(self.settings, backend)
+        self.physics: BatchPhysics | None = make_batch(
             backend,
             socket,
             self.num_envs,
             self.settings.control_dt,
-            num_threads,
-            device,
+            num_threads=num_threads,
+            device=device,
             persistent=render_mode is not None,
         )
-        if self.settings.randomization is not None and not hasattr(self.physics, "set_physics"):
-            raise ValueError(f"randomization is not supported on backend={backend!r}")
-        kind = None if self.settings.defects is None else self.settings.defects[0]
-        # Warp's worlds carry only bent pins; a plug changes the MuJoCo batch's layout.
-        if (kind is not None and backend == "warp") or (kind == "blocked" and backend == "mujoco"):
-            raise ValueError(
-                f"defects={self.settings.defects!r} is not supported on backend={backend!r}; "
-                "allowed: the single env, or backend='kinematic' (and 'mujoco' but for blocked)"
-            )
         self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -366,10 +330,9 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
     def _begin(self, ids: np.ndarray, plans: list) -> tuple[np.ndarray, list[dict[str, Any]]]:
         """Start the planned episodes of envs ``ids``: observations ``(num_envs, 8)`` (rows
         ``ids`` set) and each one's info."""
-        for i, plan in zip(ids, plans, strict=True):
-            self.physics.set_socket(int(i), plan.socket)
-            if self.settings.randomization is not None:
-                self.physics.set_physics(int(i), plan.physics)
+        for i, plan in zip(ids.tolist(), plans, strict=True):
+            self.physics.set_socket(i, plan.socket)
+            plan.apply_physics(lambda draw, i=i: self.physics.set_physics(i, draw))
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
@@ -448,6 +411,21 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self._renderers = {}
         physics, self.physics = self.physics, None
         physics.close()
+
+
+def _check_capabilities(settings: TaskSettings, backend: str) -> None:
+    """``ValueError`` if the batch of ``backend`` cannot simulate ``settings``' randomised
+    physics or defect kind."""
+    batch = simulator(backend).batch
+    if settings.randomization is not None and not batch.supports_randomization:
+        raise ValueError(f"randomization is not supported on backend={backend!r}")
+    kind = None if settings.defects is None else settings.defects[0]
+    if kind is not None and kind not in batch.defect_kinds:
+        taking = [name for name, s in SIMULATORS.items() if kind in s.batch.defect_kinds]
+        raise ValueError(
+            f"defects={settings.defects!r} is not supported on backend={backend!r}; allowed: "
+            f"the single env, or backend {', '.join(map(repr, taking))}"
+        )
 
 
 def _check_render_mode(render_mode: object, backend: str) -> None:

@@ -34,8 +34,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.utils import seeding
 
-from tolins.envs.episode import TaskSettings
 from tolins.envs.insertion_env import InsertionEnv
+from tolins.envs.task_settings import SettingsAttributes, TaskSettings, setting
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.workspace import check_goal
 
@@ -43,32 +43,15 @@ if TYPE_CHECKING:
     from tolins.envs.vector import InsertionVectorEnv
 
 
-def _setting(name: str) -> property:
-    """A read-only attribute of the vector env's ``TaskSettings``, as the single env's."""
-    return property(
-        lambda self: getattr(self._vector.settings, name), doc=f"``TaskSettings.{name}``."
-    )
-
-
-class EnvView:
+class EnvView(SettingsAttributes):
     """Env ``index`` of ``vector`` through the single env's attributes (module docstring)."""
 
     def __init__(self, vector: InsertionVectorEnv, index: int) -> None:
         self._vector = vector
         self._index = index
 
-    nominal_socket = _setting("socket")
-    measurement_noise = _setting("measurement_noise")
-    force_noise = _setting("force_noise")
-    horizon = _setting("horizon")
-    success_depth = _setting("success_depth")
-    collision_force = _setting("collision_force")
-    defect_sigma = _setting("defect_sigma")
-    initial_pose = _setting("initial_pose")
-    control_dt = _setting("control_dt")
-    reward_mode = _setting("reward_mode")
-    randomization = _setting("randomization")
-    defects = _setting("defects")
+    # the single env's is a plain attribute, set from its settings
+    control_dt = setting("control_dt")
 
     @property
     def settings(self) -> TaskSettings:

@@ -10,7 +10,7 @@ store float32 observations, so :func:`agent_env` adds two standard gymnasium wra
 
 Both are recovered from an SB3 zip's own spaces, so ``tolins evaluate --policy
 model.zip`` scores such a model on the unwrapped env without them
-(:func:`tolins.learning.external.load_sb3`).
+(:func:`tolins.learning.agents.external.load_sb3`).
 """
 
 from __future__ import annotations

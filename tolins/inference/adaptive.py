@@ -35,7 +35,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import CircularSocket
 from tolins.inference.goal import next_goal
 from tolins.inference.history import History
@@ -148,7 +147,7 @@ class InferenceGuidedPolicy:
     def _replan(self, pose: np.ndarray) -> None:
         """Record a blocked attempt at the measured ``pose`` and move the goal."""
         pins = bearings = None
-        if self.contact and isinstance(self.env.backend, MujocoBackend):
+        if self.contact and self.env.backend.supports_touch_points:
             forces = self.env.backend.pin_forces()
             pins = forces > self.touch_force
             if not pins.any():  # the board pushes back: at least the most loaded pin

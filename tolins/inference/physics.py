@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from tolins.envs.mujoco_backend import MujocoBackend
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.workspace import in_holes
 from tolins.paper import A_MAX, CONTROL_DT
+from tolins.physics.mujoco import MujocoBackend, MujocoBatch
 
 
 def physics_attempt(
@@ -46,7 +46,7 @@ def _bearings(points: np.ndarray, spec: CircularSocket, blocked: np.ndarray) -> 
 
 class AttemptBatch:
     """Many workpieces' attempts at once: up to ``slots`` downward pushes (the module
-    docstring) in one persistent :class:`~tolins.envs.mujoco_batch.MujocoBatch` (each
+    docstring) in one persistent :class:`~tolins.physics.mujoco.MujocoBatch` (each
     simulation on its own workpiece, each the single env's physics bit for bit), stepped
     on ``num_threads`` threads.
 
@@ -57,8 +57,6 @@ class AttemptBatch:
     """
 
     def __init__(self, spec: CircularSocket, slots: int = 32, num_threads: int | None = None):
-        from tolins.envs.mujoco_batch import MujocoBatch
-
         self.slots = slots
         self.physics = MujocoBatch(spec, slots, CONTROL_DT, num_threads, persistent=True)
 

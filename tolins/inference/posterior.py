@@ -233,7 +233,7 @@ def _log_target(
 @dataclass(frozen=True)
 class DefectModel:
     """The prior of :func:`sample_defect_posterior`: bent pins, pitch error, burrs and a
-    blocked hole together (issue 22's defect kinds).
+    blocked hole together (the defect kinds of :mod:`tolins.geometry.defects`).
 
     A workpiece's latent ``z = (bend (n_pins, 2), δ (2,), u (n_pins,))`` is Gaussian:
     ``bend ~ N(0, sigma²)``, the pitch error ``δ = (col, row) scale - 1 ~ N(0,

@@ -14,7 +14,7 @@ pin offset by ``N(0, SIGMA² I)``. Control and measurement are perfect: attempt 
 * ``nominal``: the nominal goal only.
 * ``oracle``: the centre goal of the true workpiece (:func:`.goal.centre_goals`).
 
-Per defect kind (``StudyConfig.kinds``, issue 22): besides these bent workpieces,
+Per defect kind (``StudyConfig.kinds``): besides these bent workpieces,
 ``kind_samples`` workpieces per kind that are bent *and* have a pitch error, burrs or a
 blocked hole (:func:`kind_workpieces`); their inference methods use the defect model
 (:data:`DEFECT_MODEL`) and stop when it says not insertable

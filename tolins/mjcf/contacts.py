@@ -20,7 +20,7 @@ It is not the default: explicit pairs skip the broadphase and are all tested in 
 step, by bounding spheres alone (a pin's has a radius of 2 mm: it is 4 mm long), so
 away from the board and inside the holes the narrowphase runs on many more pairs than
 the tree walk's oriented boxes let through; only while pins press on the board do the
-pairs save time (``benchmarks/README.md``, issue 19).
+pairs save time (``benchmarks/README.md``, "A cheaper contact step").
 """
 
 from __future__ import annotations

@@ -215,7 +215,7 @@ def _contact_pairs(spec: SocketSpec) -> list[str]:
     """The ``<pair>``s of every pin with every board piece it can reach
     (:mod:`tolins.mjcf.contacts`); the same for every spec of one family layout."""
     pieces = _board_pieces(spec)
-    pins = [(f"pin{i}", _pin_type(spec)) for i in range(spec.n_pins)]
+    pins = [(pin_geom_name(i), _pin_type(spec)) for i in range(spec.n_pins)]
     mask = reachable(pin_reach_boxes(spec), np.array([box for _, _, box in pieces]))
     # Geom ids: the board's pieces, the carrier, then the pins.
     order = pair_order(pins, [(name, kind) for name, kind, _ in pieces], mask, len(pieces) + 1)
@@ -229,7 +229,7 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
         # A short pin lacks its tip: it spans z = shortening … PIN_LENGTH.
         levels = spec.shortenings
         geoms = [
-            f'<geom name="pin{i}" class="pin" type="cylinder" '
+            f'<geom name="{pin_geom_name(i)}" class="pin" type="cylinder" '
             f'pos="{nums((x, y, half + levels[i] / 2))}" '
             f'size="{nums((radius, half - levels[i] / 2))}"/>'
             for i, ((x, y), radius) in enumerate(zip(spec.pin_centers, spec.pin_radii, strict=True))
@@ -238,13 +238,13 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
     if spec.sides == 4:
         side_half = inradius(4, spec.pin_circumradius)
         geom = (
-            f'<geom name="pin0" class="pin" type="box" pos="{nums((0, 0, half))}" '
+            f'<geom name="{pin_geom_name(0)}" class="pin" type="box" pos="{nums((0, 0, half))}" '
             f'size="{nums((side_half, side_half, half))}"/>'
         )
         return [], [geom]
     outline = polygon_vertices(spec.sides, spec.pin_circumradius)
     asset = f'<mesh name="peg" vertex="{_prism_vertices(outline, PIN_LENGTH, 0.0)}"/>'
-    return [asset], ['<geom name="pin0" class="pin" type="mesh" mesh="peg"/>']
+    return [asset], [f'<geom name="{pin_geom_name(0)}" class="pin" type="mesh" mesh="peg"/>']
 
 
 def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
@@ -265,12 +265,27 @@ def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
             f'<site name="pin{i}_zone" type="box" pos="{nums((x, y, PIN_LENGTH / 2))}" '
             f'size="{zone}" rgba="0 0 0 0"/>'
         )
-        sensors.append(f'<touch name="pin{i}_touch" site="pin{i}_zone"/>')
+        sensors.append(f'<touch name="{touch_sensor_name(i)}" site="pin{i}_zone"/>')
     return sites, sensors
 
 
+#: The workpiece's joints in the order of the pose ``[x, y, theta, z]``.
+POSE_JOINTS = ("x", "y", "theta", "z")
 #: Joint name -> index in the pose ``[x, y, theta, z]``.
-_POSE_INDEX = {"x": 0, "y": 1, "theta": 2, "z": 3}
+_POSE_INDEX = {joint: i for i, joint in enumerate(POSE_JOINTS)}
+#: The force and torque sensors at ``ft_site`` (workpiece axes).
+FORCE_SENSOR = "force"
+TORQUE_SENSOR = "torque"
+
+
+def pin_geom_name(pin: int) -> str:
+    """Name of pin ``pin``'s geom."""
+    return f"pin{pin}"
+
+
+def touch_sensor_name(pin: int) -> str:
+    """Name of the touch sensor that sums pin ``pin``'s normal contact force."""
+    return f"pin{pin}_touch"
 
 
 def _range(joint: str) -> str:
@@ -312,7 +327,8 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
     pieces they can reach instead of MuJoCo's bounding-volume trees (the default). Both
     simulate the same contacts and trajectories bit for bit; the pairs are cheaper only
     while pins are pressed on the board and dearer everywhere else, because every pair is
-    tested every step (``benchmarks/README.md``, issue 19), so they are not the default.
+    tested every step (``benchmarks/README.md``, "A cheaper contact step"), so they are
+    not the default.
     """
     if not isinstance(spec, (CircularSocket, PolygonSocket)):
         raise ValueError(f"spec={spec!r} is not a socket; allowed: CircularSocket, PolygonSocket")
@@ -391,8 +407,8 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
         _servo("utheta", "theta", HINGE_KP, HINGE_ARMATURE, TORQUE_LIMIT, A_MAX[2]),
         "</actuator>",
         "<sensor>",
-        '<force name="force" site="ft_site"/>',
-        '<torque name="torque" site="ft_site"/>',
+        f'<force name="{FORCE_SENSOR}" site="ft_site"/>',
+        f'<torque name="{TORQUE_SENSOR}" site="ft_site"/>',
         *touch_sensors,
         "</sensor>",
         "</mujoco>",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -31,7 +32,9 @@ def _spec_json(spec: SocketSpec) -> str:
 
 @dataclass
 class EpisodeBuffer:
-    """What the env reported at the reset (row 0) and after each control step.
+    """What the env reported at the reset (row 0) and after each control step: a
+    collector (:class:`tolins.rollouts.collectors.Collector`) that keeps nothing in the
+    episode's record; :func:`send_episode` logs it.
 
     ``metadata`` holds the env id, policy name, seed and the episode's socket spec.
     """
@@ -50,13 +53,21 @@ class EpisodeBuffer:
     peak_forces: list[float] = field(default_factory=list)
     events: list[tuple[int, str, str]] = field(default_factory=list)
 
-    def start(self, info: dict[str, Any]) -> None:
+    def on_reset(self, observation: np.ndarray, info: Mapping[str, Any]) -> None:
         """Row 0: the state after ``reset``."""
         self._add_state(info)
         pose = ", ".join(f"{v:.4g}" for v in info["pose"])
         self.events.append((info["step"], "INFO", f"start: pose [{pose}], seed {self.seed}"))
 
-    def add(self, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> None:
+    def on_step(
+        self,
+        observation: np.ndarray,
+        action: np.ndarray,
+        reward: float,
+        terminated: bool,
+        truncated: bool,
+        info: Mapping[str, Any],
+    ) -> None:
         """One control step's outcome, as ``env.step`` returned it."""
         step = int(info["step"])
         self._add_state(info)
@@ -79,11 +90,15 @@ class EpisodeBuffer:
                 )
             )
 
+    def result(self) -> dict[str, Any]:
+        """Nothing for the episode's record: the buffer is sent to rerun."""
+        return {}
+
     @property
     def seed(self) -> int | None:
         return self.metadata.get("seed")
 
-    def _add_state(self, info: dict[str, Any]) -> None:
+    def _add_state(self, info: Mapping[str, Any]) -> None:
         self.steps.append(int(info["step"]))
         self.poses.append(np.array(info["pose"], dtype=float))
         self.wrenches.append(np.array(info["wrench"], dtype=float))
@@ -106,7 +121,7 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
     """Log ``episode``: its static parts, then every buffered column in one call each."""
     k = episode.index
     if not episode.steps:
-        raise ValueError(f"episode {k} has no rows; allowed: a buffer started by start()")
+        raise ValueError(f"episode {k} has no rows; allowed: a buffer started by on_reset()")
     spec = episode.metadata["spec"]
     log_workpiece(stream, workpiece_path(k), spec, plugs=plugs_path(k))
     meta = {key: v for key, v in episode.metadata.items() if key != "spec" and v is not None}

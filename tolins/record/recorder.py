@@ -133,14 +133,14 @@ class RerunRecorder(gym.Wrapper):
         self._episode = EpisodeBuffer(
             self.episodes_recorded, base.control_dt, metadata, base.collision_force
         )
-        self._episode.start(info)
+        self._episode.on_reset(observation, info)
         self.episodes_recorded += 1
         return observation, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         observation, reward, terminated, truncated, info = self.env.step(action)
         if self._episode is not None:
-            self._episode.add(reward, terminated, truncated, info)
+            self._episode.on_step(observation, action, reward, terminated, truncated, info)
             if terminated or truncated:
                 self._send_pending()
         return observation, reward, terminated, truncated, info

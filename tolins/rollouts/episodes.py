@@ -1,32 +1,48 @@
-"""Run a policy's episodes in one env and summarise them: the single-env loop.
+"""An episode: its record (:class:`Episode`), the step logic every loop shares
+(:class:`EpisodeRun`) and the single-env loop (:func:`run_episode`).
 
-:func:`run_episode` keeps what Table 1 counts (:class:`Episode`), :func:`rollout` also the
-episode's (observation, action) pairs (:class:`Rollout`, for imitation). Many episodes at
-once go through the vector env (:mod:`tolins.rollouts.runner`), which gives the same
-records bit for bit.
+What an episode keeps comes from its collectors (:mod:`tolins.rollouts.collectors`):
+Table 1's figures and the force-aware scores always, a demonstration's (observation,
+action) pairs or the true poses when asked for. Many episodes at once go through the
+vector env (:mod:`tolins.rollouts.runner`), which drives the same :class:`EpisodeRun` per
+slot and gives the same records bit for bit.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import tolins.envs  # noqa: F401  (registers the env ids)
-from tolins.envs.episode import check_action
+from tolins.envs.actions import check_action
 from tolins.envs.tasks import check_env_id
-from tolins.rollouts.forces import ForceScores, ForceTracker
+from tolins.rollouts.collectors import Collector, Forces, Info, Outcome, Poses
+from tolins.rollouts.forces import ForceScores
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
+#: The fields an episode's JSON form holds: its figures and force-aware scores (the arrays
+#: of pairs and poses stay in memory).
+JSON_FIELDS = ("reward", "success", "steps", "collisions", "error", "forces", "profile")
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class Episode:
-    """What one episode came to; ``forces`` are its force-aware scores and ``profile``
-    each step's ``(depth mm, peak normal force N)`` (:mod:`tolins.rollouts.forces`; both
-    ``None`` in a record made before tolins 0.4)."""
+    """What one episode came to.
+
+    ``reward`` (the return), ``success``, ``steps``, ``collisions`` (collision steps) and
+    ``error`` (the simulator fault that ended it) are Table 1's; ``forces`` are its
+    force-aware scores and ``profile`` each step's ``(depth mm, peak normal force N)``
+    (:mod:`tolins.rollouts.forces`; both ``None`` in a record written before the scores
+    existed). ``observations`` ``(T, 8)`` and ``actions`` ``(T, 4)`` are its pairs
+    (:class:`~tolins.rollouts.collectors.Pairs`), ``poses`` ``(T + 1, 4)`` its true poses
+    (:class:`~tolins.rollouts.collectors.Poses`); ``None`` unless collected. Two records
+    are equal when every field is, arrays element for element.
+    """
 
     reward: float
     success: bool
@@ -35,10 +51,31 @@ class Episode:
     error: str | None = None
     forces: ForceScores | None = None
     profile: tuple[tuple[float, float], ...] | None = None
+    observations: np.ndarray | None = None
+    actions: np.ndarray | None = None
+    poses: np.ndarray | None = None
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Episode):
+            return NotImplemented
+        return all(_same(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return a is not None and b is not None and np.array_equal(a, b)
+    return a == b
+
+
+def episode_to_dict(episode: Episode) -> dict[str, Any]:
+    """``episode``'s JSON form: the :data:`JSON_FIELDS`, the scores as a dict."""
+    row = asdict(replace(episode, observations=None, actions=None, poses=None))
+    return {name: row[name] for name in JSON_FIELDS}
 
 
 def episode_from_dict(row: dict) -> Episode:
-    """The :class:`Episode` of ``dataclasses.asdict(episode)`` (as JSON gives it back)."""
+    """The :class:`Episode` of :func:`episode_to_dict` (or ``dataclasses.asdict``), as
+    JSON gives it back."""
     forces, profile = row.get("forces"), row.get("profile")
     return Episode(
         **{
@@ -49,102 +86,86 @@ def episode_from_dict(row: dict) -> Episode:
     )
 
 
-def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episode:
-    """Run ``policy`` in ``env`` from ``reset(seed=seed)`` until the episode ends."""
+class EpisodeRun:
+    """One episode as it runs: its policy chooses each action, its collectors record.
+
+    A loop makes one after the reset, then for every step calls :meth:`act` on the
+    observation, steps the env with the action and hands the step's outcome to
+    :meth:`observe`, until :attr:`done`; :meth:`episode` is the record. The single-env
+    loop and each slot of the vector runner drive it alike, so both make the same
+    policy calls and the same records.
+
+    Args:
+        policy: ``observation -> [ux, uy, utheta, uz]``.
+        settings: The env's ``TaskSettings`` (for :class:`~tolins.rollouts.collectors.Forces`).
+        observation: The reset's observation.
+        info: The reset's ``info``.
+        collectors: Fresh collectors beyond :class:`~tolins.rollouts.collectors.Outcome`
+            and :class:`~tolins.rollouts.collectors.Forces`, which every episode keeps.
+    """
+
+    def __init__(
+        self,
+        policy: Policy,
+        settings: Any,
+        observation: np.ndarray,
+        info: Info,
+        collectors: Sequence[Collector] = (),
+    ) -> None:
+        self.policy = policy
+        self.collectors: tuple[Collector, ...] = (Outcome(), Forces(settings), *collectors)
+        self.done = False
+        self._action = np.zeros(4)
+        for collector in self.collectors:
+            collector.on_reset(observation, info)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        """The policy's action on ``observation``, checked and clipped to ±a_max as the env
+        applies it (``ValueError`` for NaN, inf or a wrong shape)."""
+        self._action = check_action(self.policy(observation))
+        return self._action
+
+    def observe(
+        self,
+        observation: np.ndarray,
+        reward: float,
+        terminated: bool,
+        truncated: bool,
+        info: Info,
+    ) -> None:
+        """What the env's step with the last :meth:`act` returned."""
+        for collector in self.collectors:
+            collector.on_step(observation, self._action, reward, terminated, truncated, info)
+        self.done = bool(terminated or truncated)
+
+    def episode(self) -> Episode:
+        """The record: every collector's fields."""
+        record: dict[str, Any] = {}
+        for collector in self.collectors:
+            record.update(collector.result())
+        return Episode(**record)
+
+
+def run_episode(
+    env: gym.Env,
+    policy: Policy,
+    seed: int | None = None,
+    collectors: Sequence[Collector] = (),
+) -> Episode:
+    """Run ``policy`` in ``env`` from ``reset(seed=seed)`` until the episode ends; its
+    record, with what the ``collectors`` (fresh ones) kept."""
     observation, info = env.reset(seed=seed)
-    forces = ForceTracker.of(env.unwrapped.settings, info)
-    total, done = 0.0, False
-    while not done:
-        observation, reward, terminated, truncated, info = env.step(policy(observation))
-        forces.step(info["peak_force"], info["pose"][3])
-        total += reward
-        done = terminated or truncated
-    return Episode(
-        total,
-        bool(info["success"]),
-        int(info["step"]),
-        int(info["n_collisions"]),
-        info.get("error"),
-        forces.scores(),
-        forces.profile(),
-    )
-
-
-@dataclass(frozen=True)
-class Summary:
-    """Mean and std of each figure of the paper's Table 1 over episodes."""
-
-    episodes: int
-    reward_mean: float
-    reward_std: float
-    success_mean: float
-    success_std: float
-    steps_mean: float
-    steps_std: float
-    collisions_mean: float
-    collisions_std: float
-    faults: int
-
-
-def summarise(episodes: list[Episode]) -> Summary:
-    """Table 1's figures of ``episodes``."""
-    if not episodes:
-        raise ValueError("no episodes to summarise; allowed: at least one")
-    columns = {
-        "reward": [e.reward for e in episodes],
-        "success": [float(e.success) for e in episodes],
-        "steps": [e.steps for e in episodes],
-        "collisions": [e.collisions for e in episodes],
-    }
-    stats = {}
-    for name, values in columns.items():
-        stats[f"{name}_mean"] = float(np.mean(values))
-        stats[f"{name}_std"] = float(np.std(values))
-    return Summary(len(episodes), **stats, faults=sum(e.error is not None for e in episodes))
+    run = EpisodeRun(policy, env.unwrapped.settings, observation, info, collectors)
+    while not run.done:
+        observation, reward, terminated, truncated, info = env.step(run.act(observation))
+        run.observe(observation, reward, terminated, truncated, info)
+    return run.episode()
 
 
 def episode_poses(env: gym.Env, policy: Policy, seed: int | None = None) -> np.ndarray:
-    """The workpiece poses ``(steps + 1, 4)`` = ``[x, y, theta, z]`` of one episode, from
-    the initial pose to the last."""
-    observation, info = env.reset(seed=seed)
-    poses, done = [info["pose"]], False
-    while not done:
-        observation, _, terminated, truncated, info = env.step(policy(observation))
-        poses.append(info["pose"])
-        done = terminated or truncated
-    return np.array(poses)
-
-
-@dataclass(frozen=True)
-class Rollout:
-    """One episode: ``observations`` ``(T, 8)``, ``actions`` ``(T, 4)`` (clipped as the env
-    applies them), return, success, collisions."""
-
-    observations: np.ndarray
-    actions: np.ndarray
-    reward: float
-    success: bool
-    collisions: int
-
-
-def rollout(env: gym.Env, policy: Policy, seed: int) -> Rollout:
-    """One episode of ``policy`` in ``env`` from ``reset(seed=seed)``, keeping its pairs."""
-    observation, info = env.reset(seed=seed)
-    observations, actions, total, done = [], [], 0.0, False
-    while not done:
-        action = check_action(policy(observation))
-        observations.append(observation)
-        actions.append(action)
-        observation, reward, terminated, truncated, info = env.step(action)
-        total += reward
-        done = terminated or truncated
-    return Rollout(
-        np.array(observations),
-        np.array(actions),
-        total,
-        bool(info["success"]),
-        int(info["n_collisions"]),
-    )
+    """The true workpiece poses ``(steps + 1, 4)`` = ``[x, y, theta, z]`` of one episode of
+    ``policy`` in ``env``, from the initial pose to the last."""
+    return run_episode(env, policy, seed, (Poses(),)).poses
 
 
 def make_env(env_id: str, backend: str) -> gym.Env:

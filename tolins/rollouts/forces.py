@@ -3,9 +3,10 @@
 Every score comes from two per-step ``info`` entries that both backends and the vector env
 give: ``peak_force`` (the largest summed normal force between the pins and the board
 during the step, N) and the true height ``pose[3]`` (``z``, mm). :class:`ForceTracker`
-accumulates them step by step; the single-env loop
-(:func:`tolins.rollouts.episodes.run_episode`) and the vector-env runner
-(:func:`tolins.rollouts.runner.run_jobs`) both feed it, so both give the same scores.
+accumulates them step by step; the :class:`~tolins.rollouts.collectors.Forces` collector
+of every episode feeds it, in the single-env loop (:func:`tolins.rollouts.episodes.
+run_episode`) as in the vector-env runner (:func:`tolins.rollouts.runner.run_jobs`), so
+both give the same scores.
 
 * ``peak_force``: the episode's largest step peak (N).
 * ``contact_force``: the mean step peak over the steps in contact (N; 0 with none). A step

@@ -17,7 +17,8 @@ from typing import Protocol
 
 import numpy as np
 
-from tolins.rollouts.episodes import Rollout
+from tolins.rollouts.collectors import Pairs
+from tolins.rollouts.episodes import Episode
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 
 
@@ -43,11 +44,11 @@ def policy_jobs(
     policy: ParametricPolicy, workpieces: Sequence[Workpiece], seeds: Sequence[int], first: int = 0
 ) -> list[Job]:
     """Episode ``e`` of ``policy`` from ``seeds[e]`` on workpiece ``(first + e) %
-    len(workpieces)``."""
+    len(workpieces)``, its (observation, action) pairs kept."""
     jobs = []
     for e, seed in enumerate(seeds):
         piece = workpieces[(first + e) % len(workpieces)]
-        jobs.append(Job(piece.env_id, policy.bind(piece.embedding), int(seed)))
+        jobs.append(Job(piece.env_id, policy.bind(piece.embedding), int(seed), (Pairs(),)))
     return jobs
 
 
@@ -67,12 +68,12 @@ def candidate_jobs(
     ]
 
 
-def run_grouped(envs: VectorEnvCache, groups: list[list[Job]]) -> list[list[Rollout]]:
+def run_grouped(envs: VectorEnvCache, groups: list[list[Job]]) -> list[list[Episode]]:
     """:func:`~tolins.rollouts.runner.run_jobs` of all ``groups`` at once, regrouped."""
     flat = run_jobs(envs, [job for group in groups for job in group])
     out, k = [], 0
     for group in groups:
-        out.append([rollout for rollout, _ in flat[k : k + len(group)]])
+        out.append(flat[k : k + len(group)])
         k += len(group)
     return out
 
@@ -82,7 +83,7 @@ def policy_rollouts(
     policy: ParametricPolicy,
     workpieces: Sequence[Workpiece],
     seeds: Sequence[int],
-) -> list[Rollout]:
+) -> list[Episode]:
     """The episodes of :func:`policy_jobs`, run in ``envs``."""
     return run_grouped(envs, [policy_jobs(policy, workpieces, seeds)])[0]
 
@@ -94,7 +95,7 @@ def spread_rollouts(
     backend: str,
     flat: np.ndarray,
     seeds: Sequence[int],
-) -> list[Rollout]:
+) -> list[Episode]:
     """The episodes of one parameter vector, one job per episode on ``pool`` (the same
     episodes as one candidate with all ``seeds``)."""
     n = len(seeds)
@@ -113,7 +114,7 @@ class CandidatePool(Protocol):
         candidates: Sequence[np.ndarray],
         seeds: Sequence[Sequence[int]],
         first: Sequence[int] | None = None,
-    ) -> list[list[Rollout]]:
+    ) -> list[list[Episode]]:
         """The episodes of every :func:`candidate_jobs` group, in order."""
         ...
 
@@ -145,7 +146,7 @@ class VectorPool:
 
     def rollouts(
         self, policy, workpieces, backend, candidates, seeds, first=None
-    ) -> list[list[Rollout]]:
+    ) -> list[list[Episode]]:
         groups = candidate_jobs(policy, workpieces, candidates, seeds, first)
         return run_grouped(self.envs(backend), groups)
 

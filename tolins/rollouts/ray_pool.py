@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from tolins.rollouts.episodes import Rollout
+from tolins.rollouts.episodes import Episode
 from tolins.rollouts.pool import candidate_jobs, run_grouped
 from tolins.rollouts.runner import VectorEnvCache
 
@@ -42,7 +42,7 @@ class RolloutWorker:
         flat: np.ndarray,
         seeds: Sequence[int],
         first: int = 0,
-    ) -> list[Rollout]:
+    ) -> list[Episode]:
         """The episodes of one candidate (:func:`~tolins.rollouts.pool.candidate_jobs`) in
         this actor's vector envs."""
         if backend not in self._envs:
@@ -96,7 +96,7 @@ class RayPool:
 
     def rollouts(
         self, policy, workpieces, backend, candidates, seeds, first=None
-    ) -> list[list[Rollout]]:
+    ) -> list[list[Episode]]:
         import ray
         from ray.util import ActorPool
 

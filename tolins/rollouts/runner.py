@@ -1,37 +1,42 @@
-"""Many episodes at once: jobs (env id, policy, seed) run through the vector env.
+"""Many episodes at once: jobs (env id, policy, seed, collectors) run through the vector env.
 
 :func:`run_jobs` fills the ``num_envs`` slots of one :class:`~tolins.envs.vector.
 InsertionVectorEnv` per env id with jobs, steps every running slot in one batched call
 (MuJoCo's native thread pool, the GIL released) and starts the next job in a slot as soon
-as its episode ends (``reset_mask`` with the job's seed). A job's episode is the one
-:func:`~tolins.rollouts.episodes.rollout` gives in ``gymnasium.make(env_id)`` reset with
-its seed, bit for bit (the vector env's guarantee), so results depend neither on the
-number of slots nor on threads nor on the order of the jobs.
+as its episode ends (``reset_mask`` with the job's seed). Each slot's episode is an
+:class:`~tolins.rollouts.episodes.EpisodeRun`, as in the single-env loop
+:func:`~tolins.rollouts.episodes.run_episode`, and a job's episode is the one that loop
+gives in ``gymnasium.make(env_id)`` reset with its seed, bit for bit (the vector env's
+guarantee), so results depend neither on the number of slots nor on threads nor on the
+order of the jobs.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from tolins.envs.episode import check_action
-from tolins.envs.tasks import make_vec
+from tolins.envs.tasks import check_env_id, make_vec
 from tolins.envs.vector import InsertionVectorEnv
-from tolins.rollouts.episodes import Episode, Policy, Rollout, check_env_id
-from tolins.rollouts.forces import ForceTracker
+from tolins.rollouts.collectors import Collector
+from tolins.rollouts.episodes import Episode, EpisodeRun, Policy
+from tolins.rollouts.infos import InfoRow
 
 
 @dataclass(frozen=True)
 class Job:
-    """One episode to run: ``policy`` in ``env_id`` from ``reset(seed=seed)``."""
+    """One episode to run: ``policy`` in ``env_id`` from ``reset(seed=seed)``, recorded
+    by ``collectors`` (fresh ones, this job's own) beside Table 1's figures and the
+    force-aware scores."""
 
     env_id: str
     policy: Policy
     seed: int
+    collectors: tuple[Collector, ...] = ()
 
 
 class VectorEnvCache:
@@ -74,30 +79,26 @@ class VectorEnvCache:
         self._envs.clear()
 
 
-class _Slot:
-    """The episode a slot runs: its job's index and what it has recorded so far."""
-
-    def __init__(self, job: int, forces: ForceTracker) -> None:
-        self.job, self.total, self.forces = job, 0.0, forces
-        self.observations: list[np.ndarray] = []
-        self.actions: list[np.ndarray] = []
+#: A running slot: its job's index and its episode.
+_Slot = tuple[int, EpisodeRun]
 
 
-def run_jobs(envs: VectorEnvCache, jobs: Sequence[Job]) -> list[tuple[Rollout, Episode]]:
-    """Every job's episode, in the jobs' order: its :class:`Rollout` (pairs kept) and its
-    :class:`Episode` (Table 1's record, with ``steps`` and any fault)."""
-    results: list[tuple[Rollout, Episode] | None] = [None] * len(jobs)
+def run_jobs(envs: VectorEnvCache, jobs: Sequence[Job]) -> list[Episode]:
+    """Every job's episode, in the jobs' order."""
+    results: list[Episode | None] = [None] * len(jobs)
     by_env: dict[str, list[int]] = {}
     for index, job in enumerate(jobs):
         by_env.setdefault(job.env_id, []).append(index)
     for env_id, indices in by_env.items():
-        for index, result in _run_in(envs.get(env_id), jobs, indices):
-            results[index] = result
+        for index, episode in _run_in(envs.get(env_id), jobs, indices):
+            results[index] = episode
     return results  # type: ignore[return-value]
 
 
-def _run_in(env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]):
-    """Yield ``(job index, result)`` for ``indices``, run in ``env``'s slots."""
+def _run_in(
+    env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]
+) -> Iterator[tuple[int, Episode]]:
+    """Yield ``(job index, episode)`` for ``indices``, run in ``env``'s slots."""
     queue = deque(indices)
     slots: list[_Slot | None] = [None] * env.num_envs
     observations = _start(env, jobs, queue, slots)
@@ -105,25 +106,24 @@ def _run_in(env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]):
         actions = np.zeros((env.num_envs, 4))
         for i, slot in enumerate(slots):
             if slot is not None:
-                observation = observations[i].copy()
-                actions[i] = check_action(jobs[slot.job].policy(observation))
-                slot.observations.append(observation)
-                slot.actions.append(actions[i].copy())
+                actions[i] = slot[1].act(observations[i].copy())
         observations, rewards, terminated, truncated, infos = env.step(actions)
         ended = False
         for i, slot in enumerate(slots):
             if slot is None:
                 continue
-            slot.total += rewards[i]
-            slot.forces.step(infos["peak_force"][i], infos["pose"][i][3])
-            if terminated[i] or truncated[i]:
-                yield slot.job, _finish(slot, infos, i)
+            job, run = slot
+            run.observe(observations[i], rewards[i], terminated[i], truncated[i], InfoRow(infos, i))
+            if run.done:
+                yield job, run.episode()
                 slots[i], ended = None, True
         if ended and queue:
             observations = _start(env, jobs, queue, slots)
 
 
-def _start(env, jobs, queue, slots) -> np.ndarray:
+def _start(
+    env: InsertionVectorEnv, jobs: Sequence[Job], queue: deque[int], slots: list[_Slot | None]
+) -> np.ndarray:
     """Put the next queued jobs into the free slots and reset those slots with their seeds;
     every env's observation (a masked reset keeps the others' last ones)."""
     mask = np.zeros(env.num_envs, dtype=bool)
@@ -134,24 +134,10 @@ def _start(env, jobs, queue, slots) -> np.ndarray:
             starting[i] = queue.popleft()
             mask[i], seeds[i] = True, int(jobs[starting[i]].seed)
     observations, infos = env.reset(seed=seeds, options={"reset_mask": mask})
-    for i, job in starting.items():
-        slots[i] = _Slot(job, ForceTracker.of(env.settings, {"pose": infos["pose"][i]}))
+    for i, index in starting.items():
+        job = jobs[index]
+        run = EpisodeRun(
+            job.policy, env.settings, observations[i], InfoRow(infos, i), job.collectors
+        )
+        slots[i] = (index, run)
     return observations
-
-
-def _finish(slot: _Slot, infos: dict, i: int) -> tuple[Rollout, Episode]:
-    success, collisions = bool(infos["success"][i]), int(infos["n_collisions"][i])
-    has_error = "error" in infos and infos["_error"][i]
-    error = str(infos["error"][i]) if has_error else None
-    total = float(slot.total)
-    rollout = Rollout(
-        np.array(slot.observations).reshape(-1, 8),
-        np.array(slot.actions).reshape(-1, 4),
-        total,
-        success,
-        collisions,
-    )
-    steps = int(infos["step"][i])
-    forces = slot.forces
-    episode = Episode(total, success, steps, collisions, error, forces.scores(), forces.profile())
-    return rollout, episode

@@ -20,16 +20,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from tolins.envs.tasks import make_vec
 from tolins.envs.vector import check_actions_shape
-
-
-def _row(infos: dict[str, Any], i: int) -> dict[str, Any]:
-    """Env ``i``'s entries of gymnasium's batched ``infos``, as a plain dict."""
-    row = {}
-    for key, value in infos.items():
-        if key.startswith("_") or not infos[f"_{key}"][i]:
-            continue
-        row[key] = _row(value, i) if isinstance(value, dict) else value[i]
-    return row
+from tolins.rollouts.infos import info_dict
 
 
 class Sb3VectorEnv(VecEnv):
@@ -54,7 +45,7 @@ class Sb3VectorEnv(VecEnv):
     def reset(self) -> np.ndarray:
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
         observations, infos = self.vector.reset(seed=seeds, options=self._options[0] or None)
-        self.reset_infos = [_row(infos, i) for i in range(self.num_envs)]
+        self.reset_infos = [info_dict(infos, i) for i in range(self.num_envs)]
         self._reset_seeds()
         self._reset_options()
         return observations.astype(np.float32)
@@ -70,7 +61,7 @@ class Sb3VectorEnv(VecEnv):
         dones = terminated | truncated
         rows = []
         for i in range(self.num_envs):
-            row = _row(infos, i)
+            row = info_dict(infos, i)
             limit = bool(truncated[i] and not terminated[i])
             if dones[i]:
                 reset_info = {k: v for k, v in row.items() if not k.startswith("final_")}

@@ -1,0 +1,265 @@
+"""Where the bench's stages run: :class:`LocalExecutor` (this process, the default) or
+:class:`RayExecutor` (Ray tasks on a cluster, ``pip install 'tolins[ray]'``).
+
+A :class:`Job` is one stage: a module-level function, its arguments, and the jobs whose
+results it takes as its last arguments. Both executors call the same functions with the
+same arguments and return the results by job name in the jobs' order; they differ only
+in where and when each job runs:
+
+- local: the jobs in their order, each run of consecutive ``side_by_side`` jobs (the
+  evaluations) on a pool of ``workers`` threads with torch on one thread; RS-GAIL's
+  candidates on its own thread pool.
+- Ray: every job as a task (1 CPU) as soon as its dependencies are done; torch on one
+  thread in ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as
+  locally: torch's results can depend on its thread count); RS-GAIL's candidates on one
+  :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
+
+Results are identical (tested): every stage's seeds are fixed by its config, not by
+where it runs. Stage folders need a filesystem every node shares (``DIR`` is checked on
+the node before each task); each stage is submitted once and writes its files
+atomically, the marker last (:mod:`tolins.bench.store.cache`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import socket
+import sys
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+EXECUTORS = ("local", "ray")
+INSTALL_RAY = "pip install 'tolins[ray]'"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One stage: ``fn(*args, *[result of each of deps])``.
+
+    Attributes:
+        name: Unique name (the stage's name).
+        fn: A module-level function (Ray pickles it by reference).
+        args: Its first arguments (picklable).
+        deps: Names of earlier jobs whose results are its last arguments.
+        side_by_side: May run beside other such jobs on threads (torch on one thread).
+    """
+
+    name: str
+    fn: Callable[..., Any]
+    args: tuple[Any, ...] = ()
+    deps: tuple[str, ...] = ()
+    side_by_side: bool = False
+
+
+Callback = Callable[[Job], None] | None
+DoneCallback = Callable[[Job, Any], None] | None
+
+
+class LocalExecutor:
+    """Jobs in their order in this process; runs of ``side_by_side`` jobs on threads."""
+
+    name = "local"
+
+    def __init__(self, workers: int = 2) -> None:
+        self.workers = workers
+        self.placement: dict[str, dict[str, Any]] = {}
+
+    def candidate_pool(self) -> None:
+        """``None``: each RS-GAIL run makes its own thread pool."""
+        return None
+
+    def run(
+        self, jobs: Sequence[Job], *, on_start: Callback = None, on_done: DoneCallback = None
+    ) -> dict[str, Any]:
+        from tolins.learning.artefacts import single_threaded_torch
+
+        results: dict[str, Any] = {}
+
+        def call(job: Job) -> Any:
+            if on_start:
+                on_start(job)
+            value = job.fn(*job.args, *[results[d] for d in job.deps])
+            self.placement[job.name] = _where()
+            if on_done:
+                on_done(job, value)
+            return value
+
+        start = 0
+        while start < len(jobs):
+            end = start + 1
+            if jobs[start].side_by_side:
+                while end < len(jobs) and jobs[end].side_by_side:
+                    end += 1
+                batch = jobs[start:end]
+                with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
+                    values = list(pool.map(call, batch))
+                results.update((job.name, value) for job, value in zip(batch, values, strict=True))
+            else:
+                results[jobs[start].name] = call(jobs[start])
+            start = end
+        return {job.name: results[job.name] for job in jobs}
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+def check_address(address: str | None) -> None:
+    """Raise ``ValueError`` unless ``address`` is ``None``, ``auto`` or ``HOST:PORT``."""
+    if address is None or address == "auto":
+        return
+    match = re.fullmatch(r"([A-Za-z0-9._-]+|\[[0-9A-Fa-f:]+\]):(\d{1,5})", address)
+    if match is None or not 1 <= int(match[2]) <= 65535:
+        raise ValueError(
+            f"address={address!r}; allowed: auto (the cluster `ray start` started on this "
+            "machine) or HOST:PORT of a Ray head node, e.g. 127.0.0.1:6379"
+        )
+
+
+class RayExecutor:
+    """Jobs as Ray tasks following their dependencies.
+
+    Args:
+        address: ``None`` starts a Ray instance on this machine, or uses the one this
+            process already initialised (``ray.init(...)`` by the caller); ``auto`` or
+            ``HOST:PORT`` connects to a running cluster.
+        shared: A folder every task checks it can see (the bench's output folder).
+    """
+
+    name = "ray"
+
+    def __init__(self, address: str | None = None, *, shared: str | Path | None = None) -> None:
+        check_address(address)
+        try:
+            import ray
+        except ImportError:
+            raise ValueError(
+                f"--executor ray needs Ray, which is not installed: {INSTALL_RAY}"
+            ) from None
+        import torch
+
+        self._ray = ray
+        _probe(address)
+        self._owned = not ray.is_initialized()
+        if self._owned:
+            _connect(ray, address)
+        elif address is not None:
+            raise ValueError(
+                f"address={address!r}, but Ray is already initialised in this process: "
+                "pass no address to use that instance, or call ray.shutdown() first"
+            )
+        self.shared = None if shared is None else str(Path(shared).resolve())
+        self.torch_threads = torch.get_num_threads()
+        self.placement: dict[str, dict[str, Any]] = {}
+        self._pool = None
+
+    def candidate_pool(self):
+        """The :class:`~tolins.rollouts.ray_pool.RayPool` all trainings share (started once)."""
+        if self._pool is None:
+            from tolins.rollouts.ray_pool import RayPool
+
+            self._pool = RayPool.start()
+        return self._pool
+
+    def run(
+        self, jobs: Sequence[Job], *, on_start: Callback = None, on_done: DoneCallback = None
+    ) -> dict[str, Any]:
+        ray = self._ray
+        task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
+        values, where = {}, {}
+        for job in jobs:
+            threads = 1 if job.side_by_side else self.torch_threads
+            deps = [values[d] for d in job.deps]
+            options = {"name": job.name}
+            values[job.name], where[job.name] = task.options(**options).remote(
+                job.fn, job.args, threads, self.shared, *deps
+            )
+            if on_start:
+                on_start(job)
+        by_ref = {where[job.name]: job for job in jobs}
+        pending = list(by_ref)
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            job = by_ref[done[0]]
+            self.placement[job.name] = ray.get(done[0])
+            if on_done:
+                on_done(job, ray.get(values[job.name]))
+        return {job.name: ray.get(values[job.name]) for job in jobs}
+
+    def close(self) -> None:
+        """End the rollout actors; disconnect from (or stop) the Ray instance started here."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+        if self._owned and self._ray.is_initialized():
+            self._ray.shutdown()
+
+
+def make_executor(
+    name: str, *, workers: int = 2, address: str | None = None, shared: str | Path | None = None
+) -> LocalExecutor | RayExecutor:
+    """The executor called ``name`` (:data:`EXECUTORS`)."""
+    if name == "local":
+        if address is not None:
+            raise ValueError(f"address={address!r} needs executor='ray' (--executor ray)")
+        return LocalExecutor(workers)
+    if name == "ray":
+        return RayExecutor(address, shared=shared)
+    raise ValueError(f"executor={name!r}; allowed: {', '.join(EXECUTORS)}")
+
+
+def _probe(address: str | None) -> None:
+    """Fail fast, with what to do, when nothing listens at ``HOST:PORT``."""
+    if address is None or address == "auto":
+        return
+    host, port = address.rsplit(":", 1)
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5).close()
+    except OSError as error:
+        raise ValueError(
+            f"address={address!r}: no Ray head answers there ({error}); start one with "
+            "`ray start --head --port=PORT` or pass --address auto"
+        ) from None
+
+
+def _connect(ray: Any, address: str | None) -> None:
+    if address is None:
+        ray.init(include_dashboard=False, configure_logging=False)
+        return
+    try:
+        ray.init(address=address, configure_logging=False)
+    except ConnectionError as error:
+        raise ValueError(
+            f"address={address!r}: could not connect to a Ray cluster ({error}); start "
+            "one with `ray start --head`"
+        ) from None
+
+
+def _where() -> dict[str, Any]:
+    """Where this call runs: Ray node id (``None`` outside Ray), host, process, thread."""
+    ray = sys.modules.get("ray")  # never imported by the local executor
+    node = ray.get_runtime_context().get_node_id() if ray and ray.is_initialized() else None
+    return {
+        "node": node,
+        "host": socket.gethostname(),
+        "pid": os.getpid(),
+        "thread": threading.current_thread().name,
+    }
+
+
+def _ray_task(
+    fn: Callable[..., Any], args: tuple, threads: int, shared: str | None, *deps: Any
+) -> tuple[Any, dict[str, Any]]:
+    import torch
+
+    if shared is not None and not Path(shared).is_dir():
+        raise FileNotFoundError(
+            f"{shared} is not visible on {socket.gethostname()}: with --executor ray the "
+            "output folder must be on a filesystem every Ray node shares (NFS, a volume)"
+        )
+    torch.set_num_threads(threads)
+    return fn(*args, *deps), _where()

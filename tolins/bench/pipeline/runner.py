@@ -1,0 +1,163 @@
+"""``tolins bench``: train and evaluate Table 1's rows and run the inference study.
+
+Stages (all cached by config hash under ``DIR/stages``, see :mod:`.cache`): the trainings
+each selected row needs, once per training seed (:mod:`tolins.bench.jobs.training`); one
+evaluation per row and seed (:mod:`tolins.bench.jobs.row_evaluation`); the robustness
+stages; the inference study. The stages that have not finished run as jobs of an executor
+(:mod:`.executor`: this process, or Ray tasks on a cluster), each after the stage it needs,
+under one progress bar over all of them (:mod:`.progress`: the stage running, the time
+left). Then the reports: every file in ``DIR`` is rewritten from the finished stages
+(:mod:`tolins.bench.reports`), and ``timeline.png`` shows when and where each stage ran
+(:mod:`.timeline`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from tolins.bench.jobs import row_evaluation, study
+from tolins.bench.jobs.robustness import PREFIX, robustness_results
+from tolins.bench.pipeline.config import BenchConfig, BenchRun
+from tolins.bench.pipeline.executor import Job, make_executor
+from tolins.bench.pipeline.lock import locked_folder
+from tolins.bench.pipeline.plan import (
+    Plan,
+    plan_evaluations,
+    plan_robustness,
+    plan_study,
+    plan_trainings,
+    plan_trajectories,
+)
+from tolins.bench.pipeline.profiles import PROFILES
+from tolins.bench.pipeline.progress import BenchProgress, expected_cost
+from tolins.bench.pipeline.settings import demonstrations
+from tolins.bench.pipeline.timeline import write_timeline
+from tolins.bench.reports.writer import write_reports
+from tolins.bench.store.cache import StageCache
+from tolins.bench.store.integrity import StageFileError, read_json
+from tolins.bench.table.claims import check_claims
+from tolins.bench.table.results import row_entry
+from tolins.bench.table.rows import select_rows
+from tolins.datasets.reader import require_minari
+
+
+def run_bench(
+    config: BenchConfig, *, progress: bool = True, log: Callable[[str], None] = tqdm.write
+) -> BenchRun:
+    """Run (or resume) the benchmark and write every report into ``config.out``, holding
+    its lock (:mod:`.lock`: ``ValueError`` naming the process when another bench has it)."""
+    with locked_folder(config.out):
+        return _run_bench(config, progress=progress, log=log)
+
+
+def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None]) -> BenchRun:
+    began = time.perf_counter()
+    profile, backend = PROFILES[config.profile], config.backend
+    seeds = config.seeds or profile.seeds
+    rows = select_rows(config.rows)
+    out = Path(config.out)
+    cache = StageCache(out)
+    run = BenchRun(config, profile, {}, [], None, 0.0)
+    executor = make_executor(
+        config.executor, workers=config.workers, address=config.address, shared=cache.root
+    )
+    cache.root.mkdir(parents=True, exist_ok=True)
+    try:
+        local = executor.name == "local"
+        plan = Plan(cache, log)
+        if any(demonstrations(t, profile, backend, 0) for row in rows for t in row.trainings):
+            require_minari("tolins bench (its demonstrations are Minari datasets)")
+        pool = executor.candidate_pool()
+        plan_trainings(plan, rows, seeds, profile, backend, pool, progress and local, log)
+        plan_evaluations(plan, rows, seeds, profile, backend)
+        if config.robustness:
+            plan_robustness(plan, seeds, profile, backend)
+        if config.study:
+            workers = 2 if local else 1  # a Ray task holds one CPU
+            plan_study(plan, profile, backend, workers, progress and local)
+        plan_trajectories(plan, backend)
+        names = [*plan.done, *(job.name for job in plan.jobs)]
+        costs = {name: expected_cost(name, profile, backend) for name in names}
+        with BenchProgress(costs, plan.done, show=progress) as stages:
+            plan.done.update(
+                executor.run(
+                    plan.jobs,
+                    on_start=lambda job: _log_start(job, plan, log, stages),
+                    on_done=lambda job, result: _log_done(job, result, plan, log, stages),
+                )
+            )
+        run.stage_times = _stage_times(plan, cache, executor.placement)
+    finally:
+        executor.close()
+    for name, value in plan.done.items():
+        folder = value.parent if name in plan.trainings else value
+        run.stage_folders[name] = folder
+        run.stage_wall_s[name] = cache.wall_s(folder)
+    run.cached += [name for name in plan.done if name in plan.cached]
+    for row in rows:
+        run.episodes[row.id] = [
+            row_evaluation.read_episodes(
+                run.stage_folders[row_evaluation.stage_name(row, s)], profile.eval_episodes
+            )
+            for s in range(seeds)
+        ]
+        run.results[row.id] = row_entry(row, run.episodes[row.id])
+    budgets = (profile.deep_rl_env_steps, profile.rs_gail_env_steps)
+    run.claims = check_claims(run.results, budgets=budgets)
+    if config.study:
+        path = run.stage_folders[study.NAME] / study.STUDY
+        run.study = read_json(path)
+        if not isinstance(run.study, dict):
+            raise StageFileError(f"{path}: not an inference study; delete its folder to rerun")
+    if config.robustness:
+        run.robustness = robustness_results(run.stage_folders, profile.robustness_episodes, seeds)
+    run.wall_s = time.perf_counter() - began
+    write_reports(run, seeds)
+    write_timeline(out, run)
+    return run
+
+
+def _log_start(job: Job, plan: Plan, log: Callable[[str], None], stages: BenchProgress) -> None:
+    stages.start(job.name)
+    if job.name in plan.trainings:
+        log(f"training {job.name} ({plan.trainings[job.name]})")
+    elif job.name == study.NAME:
+        settings = plan.stages[job.name].spec
+        source = "MuJoCo contacts" if settings.physics else "the tolerance model"
+        log(f"inference study: {settings.samples} workpieces, outcomes from {source}")
+
+
+def _log_done(
+    job: Job, result: Path, plan: Plan, log: Callable[[str], None], stages: BenchProgress
+) -> None:
+    wall_s = plan.cache.wall_s(result.parent if job.name in plan.trainings else result)
+    stages.finish(job.name, wall_s)
+    if job.name.startswith("demos-"):
+        log(f"{job.name}: {plan.stages[job.name].spec.episodes} episodes written ({wall_s:.0f} s)")
+    elif job.name.startswith(PREFIX):
+        log(f"{job.name}: evaluated ({wall_s:.0f} s)")
+    elif job.name in plan.trainings:
+        log(f"{job.name}: trained ({wall_s:.0f} s)")
+
+
+def _stage_times(
+    plan: Plan, cache: StageCache, placement: dict[str, dict[str, Any]]
+) -> dict[str, dict[str, Any]]:
+    """When and where each stage ran (from its marker and the executor), and if cached."""
+    times = {}
+    for name, value in plan.done.items():
+        marker = cache.record(value.parent if name in plan.trainings else value)
+        times[name] = {
+            "started": marker.get("started"),
+            "finished": marker.get("finished"),
+            "wall_s": marker["wall_s"],
+            "cached": name in plan.cached,
+            **{"host": marker.get("host"), "pid": marker.get("pid")},
+            **placement.get(name, {}),
+        }
+    return times

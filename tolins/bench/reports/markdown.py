@@ -1,0 +1,199 @@
+"""``results.md`` of a benchmark run: Table 1 beside the paper, the claims, the contact
+forces, the study, the robustness table, the backends side by side and the figures."""
+
+from __future__ import annotations
+
+import datetime
+from typing import TYPE_CHECKING, Any
+
+from tolins.bench.reports.robustness import format_section
+from tolins.bench.table.claims import ClaimCheck
+from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
+from tolins.bench.table.rows import PAPER
+from tolins.bench.table.seeds import FIRST_SEED
+from tolins.bench.table.statistics import one_seed_margin
+
+if TYPE_CHECKING:
+    from tolins.bench.pipeline.config import BenchRun
+
+_FIGURES = (("reward", 2), ("success", 2), ("steps", 2), ("collisions", 2))
+
+
+def _pm(mean: float, std: float, digits: int = 2) -> str:
+    return f"{mean:.{digits}f} ± {std:.{digits}f}"
+
+
+#: Figures whose 95 % CI (and, for reward, IQM) get columns of their own in the table.
+_WITH_CI = ("reward", "success")
+
+
+def _ci(entry: dict[str, Any], key: str, digits: int = 2) -> str:
+    low, high = entry.get(key) or (None, None)
+    return "–" if low is None else f"[{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def format_results_table(results: dict[str, dict[str, Any]]) -> str:
+    """Table 1 as Markdown: each figure of this run beside the paper's; reward and success
+    with the 95 % CI of their mean, reward with the IQM of the per-seed means."""
+    header = "| ID | policy | train env | eval env |"
+    rule = "|---|---|---|---|"
+    for name, _ in _FIGURES:
+        extra = " 95 % CI |" + (" IQM |" if name == "reward" else "") if name in _WITH_CI else ""
+        header += f" {name} |{extra} paper |"
+        rule += "---|" * (2 + extra.count("|"))
+    lines = [header, rule]
+    for row_id, entry in results.items():
+        cells = [row_id, entry["policy"], entry["train_env"], _short(entry["eval_env"])]
+        for name, digits in _FIGURES:
+            cells.append(_pm(entry[f"{name}_mean"], entry[f"{name}_std"], digits))
+            if name in _WITH_CI:
+                cells.append(_ci(entry, f"{name}_ci", digits))
+            if name == "reward":
+                iqm = entry.get("reward_iqm")
+                cells.append("–" if iqm is None else f"{iqm:.{digits}f}")
+            cells.append(_pm(*PAPER[row_id][name]) if row_id in PAPER else "–")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def format_claims(claims: list[ClaimCheck]) -> str:
+    """One bullet per claim: the verdict, what it rests on (training seeds, or the one-seed
+    caveat), and each pair's difference [95 % CI] and P(better > worse) [95 % CI]."""
+    lines = []
+    for check in claims:
+        evidence = "; ".join(c.describe() for c in check.comparisons)
+        line = f"- **{check.claim.statement}: {check.verdict}** ({check.basis})."
+        lines.append(f"{line} {evidence}" if evidence else line)
+    return "\n".join(lines)
+
+
+def format_backends(
+    backend: str, results: dict[str, Any], other: str, other_results: dict[str, Any]
+) -> str:
+    """Each row's means on the kinematic simulator → on MuJoCo, with the change the contact
+    physics makes in brackets."""
+    physics, kinematic = (
+        (results, other_results) if backend == "mujoco" else (other_results, results)
+    )
+    lines = [
+        "| ID | policy | eval env | reward | success rate | steps | collisions |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for row_id, entry in physics.items():
+        if row_id not in kinematic:
+            continue
+        cells = [row_id, entry["policy"], _short(entry["eval_env"])]
+        for name, digits in _FIGURES:
+            before, after = kinematic[row_id][f"{name}_mean"], entry[f"{name}_mean"]
+            cells.append(f"{before:.{digits}f} → {after:.{digits}f} ({after - before:+.{digits}f})")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = None) -> str:
+    """``results.md``: the table beside the paper, the claims, the study, the figures."""
+    config = run.config
+    seeds = run.results[next(iter(run.results))]["seeds"] if run.results else 0
+    episodes = run.profile.eval_episodes
+    parts = [
+        f"# tolins bench: Table 1 on the {config.backend} backend ({config.profile} profile)",
+        "",
+        f"{datetime.date.today().isoformat()}, `{_command(config)}`: "
+        f"{run.wall_s / 60:.1f} min ({len(run.cached)} of {len(run.stage_wall_s)} stages "
+        f"cached; the stages took {sum(run.stage_wall_s.values()) / 60:.1f} min when they ran, "
+        f"evaluations {config.workers} at a time). "
+        f"{seeds} training seed(s), {episodes} evaluation episodes per row and seed "
+        f"(seeds {FIRST_SEED}…); ± is the std over "
+        f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs). "
+        f"{_interval_note(seeds)}",
+        "",
+        format_results_table(run.results),
+        "",
+        "![reward and success beside the paper](table.png)",
+        "",
+        *_force_section(run.results),
+        "## The paper's claims in this run",
+        "",
+        _VERDICT_RULE,
+        "",
+        format_claims(run.claims),
+        "",
+        *(f"![{c.claim.name}](claims/{c.claim.name}.png)" for c in run.claims if c.comparisons),
+    ]
+    if run.study is not None:
+        from tolins.inference.report import format_markdown as format_study
+
+        parts += ["", "## Inference study", "", format_study(run.study), ""]
+        parts += ["![inference study](inference_study.png)"]
+    parts += format_section(run.robustness)
+    if other is not None:
+        parts += [
+            "",
+            f"## Backends side by side ({config.backend} vs {other[0]})",
+            "",
+            "Means of the same pipeline (same profile, seeds and evaluation seeds) on the "
+            "paper's kinematic simulator → on MuJoCo contact physics, the change in "
+            f"brackets (`results.{other[0]}.json`: the other backend's last run in this "
+            "folder).",
+            "",
+            format_backends(config.backend, run.results, *other),
+        ]
+    parts += [
+        "",
+        "## Figures and recordings",
+        "",
+        "- `learning_curves.png`: RS-GAIL's curves of every trained policy.",
+        "- `env_step_curves.png`: sparse reward against env steps of RS-GAIL's π_n and "
+        "the deep-RL baselines (PPO, SAC; rows R1.x).",
+        "- `trajectories.png`: π_n's trajectories over training (the paper's Fig. 4a).",
+        "- `tolerance_images.png`: the tolerance images of the workpieces.",
+        "- `force_profiles/{ID}.png`: each row's normal force against insertion depth over "
+        "its evaluation episodes (training seed 0), successes and failures coloured.",
+        "- `recordings/{ID}.rrd`: evaluation episodes of each row; "
+        "`tolins replay recordings/C2.3.rrd`.",
+        "",
+    ]
+    return "\n".join(parts)
+
+
+def _force_section(results: dict[str, dict[str, Any]]) -> list[str]:
+    """``results.md``'s "Contact forces" section (nothing when no row has the figures)."""
+    table = format_force_table(results)
+    return ["## Contact forces", "", FORCE_NOTE, "", table, ""] if table else []
+
+
+_VERDICT_RULE = (
+    "Each pair: the difference of mean reward [its 95 % stratified-bootstrap CI] and "
+    "P(better > worse) [95 % CI] (rliable). *held*: the CI of the difference lies above 0; "
+    "*did not hold*: below 0; *inconclusive*: it contains 0. With one training seed the CIs "
+    "are over episodes and decide only beyond the training noise they cannot show "
+    f"(±{one_seed_margin(2)} reward for two trained rows, ±{one_seed_margin(1)} for a "
+    "trained row against an expert). A claim holds when every pair held and does not when "
+    "any did not."
+)
+
+
+def _interval_note(seeds: int) -> str:
+    if seeds > 1:
+        return (
+            f"[CI]: the 95 % stratified-bootstrap CI of the mean over the {seeds} training "
+            "seeds (rliable, 2000 resamples); IQM: the interquartile mean of the per-seed means."
+        )
+    return (
+        "[CI]: the 95 % bootstrap CI over the episodes of the one training seed (training "
+        "variance not measured); IQM: over those episodes."
+    )
+
+
+def _short(env_id: str) -> str:
+    return env_id.removeprefix("tolins/").removesuffix("-v1")
+
+
+def _command(config) -> str:
+    parts = ["tolins bench", f"--profile {config.profile}", f"--backend {config.backend}"]
+    if config.rows:
+        parts.append(f"--rows {config.rows}")
+    if config.seeds:
+        parts.append(f"--seeds {config.seeds}")
+    parts.append(f"--out {config.out}")
+    return " ".join(parts)

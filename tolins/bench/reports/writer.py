@@ -1,0 +1,104 @@
+"""The files of a benchmark run: ``results.json``, ``results.md``, ``run.json``, plots,
+recordings and the inference study, all rewritten from the finished stages."""
+
+from __future__ import annotations
+
+import datetime
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from tolins.atomic import atomic_json, atomic_write
+from tolins.bench.jobs import study
+from tolins.bench.jobs.row_evaluation import RECORDING
+from tolins.bench.reports.figures import write_figures
+from tolins.bench.reports.markdown import format_markdown
+from tolins.bench.reports.robustness import plot_robustness
+from tolins.bench.store.integrity import StageFileError
+from tolins.bench.table.results import read_results, results_document
+from tolins.bench.table.robustness import KEY
+from tolins.physics import BACKENDS
+
+if TYPE_CHECKING:
+    from tolins.bench.pipeline.config import BenchRun
+
+
+def write_reports(run: BenchRun, seeds: int) -> list[Path]:
+    """Write every output of ``run`` into ``run.config.out``; the paths written."""
+    out = Path(run.config.out)
+    backend = run.config.backend
+    document = results_document(
+        run.results, source="bench", backend=backend, profile=run.config.profile
+    )
+    document["claims"] = {check.claim.name: check.to_json() for check in run.claims}
+    if run.robustness is not None:
+        document[KEY] = run.robustness
+    written = [
+        atomic_json(out / "results.json", document),
+        atomic_json(out / f"results.{backend}.json", document),
+    ]
+    if run.study is not None:
+        written.append(atomic_json(out / "inference.json", run.study))
+        written.append(_copy(run.stage_folders[study.NAME] / study.PLOT, out))
+    else:  # an earlier run's study would read as this run's (its stage stays cached)
+        (out / "inference.json").unlink(missing_ok=True)
+        (out / "inference_study.png").unlink(missing_ok=True)
+    written += _recordings(run, out)
+    if run.robustness is not None:
+        written.append(plot_robustness(out / "robustness.png", run.robustness))
+    else:  # an earlier run's table would read as this run's
+        (out / "robustness.png").unlink(missing_ok=True)
+    written += write_figures(run, out)
+    written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
+    text = format_markdown(run, _other_backend(out, backend))
+    written.append(atomic_write(out / "results.md", lambda file: file.write(text), mode="w"))
+    return written
+
+
+def _copy(source: Path, folder: Path, name: str | None = None) -> Path:
+    data = source.read_bytes()
+    return atomic_write(folder / (name or source.name), lambda file: file.write(data))
+
+
+def _recordings(run: BenchRun, out: Path) -> list[Path]:
+    from tolins.record import RrdError, check_rrd
+
+    written = []
+    for row_id in run.results:
+        source = run.stage_folders[f"eval-{row_id}-seed0"] / RECORDING
+        if source.is_file():
+            try:  # a truncated recording is not shipped as the row's
+                check_rrd(source)
+            except RrdError as error:
+                raise StageFileError(f"{error}: delete {source.parent} to rerun it") from error
+            written.append(_copy(source, out / "recordings", f"{row_id}.rrd"))
+    return written
+
+
+def _other_backend(out: Path, backend: str) -> tuple[str, dict[str, Any]] | None:
+    other = next(b for b in BACKENDS if b != backend)
+    path = out / f"results.{other}.json"
+    return (other, read_results(path)["rows"]) if path.is_file() else None
+
+
+def _run_record(run: BenchRun, seeds: int) -> dict[str, Any]:
+    import mujoco
+    import torch
+
+    import tolins
+
+    return {
+        "date": datetime.date.today().isoformat(),
+        "config": asdict(run.config),
+        "profile": asdict(run.profile),
+        "seeds": seeds,
+        "wall_s": run.wall_s,
+        "stage_wall_s": run.stage_wall_s,
+        "cached_stages": run.cached,
+        "claims": {check.claim.name: check.to_json() for check in run.claims},
+        "versions": {
+            "tolins": tolins.__version__,
+            "mujoco": mujoco.__version__,
+            "torch": torch.__version__,
+        },
+    }

@@ -1,0 +1,66 @@
+"""``tolins bench``: :func:`tolins.bench.pipeline.runner.run_bench`, its options generated
+from :class:`~tolins.bench.pipeline.config.BenchConfig`."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tolins.bench.pipeline.config import SEEDS_MAX, BenchConfig
+from tolins.bench.pipeline.executor import EXECUTORS
+from tolins.bench.pipeline.profiles import PROFILES
+from tolins.cli import checks
+from tolins.cli.args import Option, add_config_arguments, config_from_args
+from tolins.physics import BACKENDS
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """Add ``bench`` to the ``tolins`` parser."""
+    bench = commands.add_parser(
+        "bench",
+        help="train and evaluate the paper's Table 1 and its inference study, with reports",
+        description="Train what each row of the paper's Table 1 needs, evaluate every row "
+        "and run the inference study; write results.json, results.md, plots and rerun "
+        "recordings into --out. Stages are cached by config hash: an interrupted run "
+        "resumes, a finished one is only re-reported.",
+    )
+    options = {
+        "profile": Option(choices=PROFILES),
+        "rows": Option(
+            action=checks.JoinedList,
+            help="comma-separated row ids, e.g. C2.1,C2.3 (default: all); repeated, they add up",
+        ),
+        "backend": Option(choices=BACKENDS),
+        "seeds": Option(
+            type=checks.positive_int,
+            help=f"training seeds, at most {SEEDS_MAX} (default: the profile's)",
+        ),
+        "out": Option(default=None, help="output folder (default: results/PROFILE)"),
+        "workers": Option(type=checks.positive_int),
+        "executor": Option(choices=EXECUTORS),
+    }
+    add_config_arguments(bench, BenchConfig, options)
+    bench.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check every option, run the bench, and print its table and claims."""
+    try:
+        out = checks.output_folder("--out", args.out or Path("results") / args.profile)
+        config = config_from_args(BenchConfig, args, out=str(out))
+    except ValueError as error:  # OptionError too
+        return checks.fail("tolins bench", error)
+    from tolins.bench.pipeline.runner import run_bench
+    from tolins.bench.reports.markdown import format_claims, format_results_table
+
+    try:
+        bench = run_bench(config)
+    except (ValueError, FileNotFoundError) as error:
+        print(f"tolins bench: {error}", file=sys.stderr)
+        return 2
+    print(format_results_table(bench.results))
+    print("\nThe paper's claims in this run:")
+    print(format_claims(bench.claims))
+    print(f"\n{bench.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json and plots")
+    return 0

@@ -1,0 +1,186 @@
+"""The settings of one insertion task, validated once, and the per-episode draws they define.
+
+:class:`TaskSettings` holds what every API of the task shares (noise, horizon, success and
+collision thresholds, control period, reward mode, defect and physics randomisation) and
+draws an episode's workpiece and physics, judges success and measures an observation.
+The gym env, the vector env and the dm_control task all build one and hand it to their
+:class:`~tolins.envs.episode_state.EpisodeState`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+
+from tolins.envs.initial_pose import InitialPoseDistribution, check_initial_pose, spread_pose
+from tolins.envs.reward import check_reward_mode
+from tolins.geometry.defects import check_defect_sigma, check_defects, sample_defects
+from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.geometry.validation import check_int, check_positive, finite_vector
+from tolins.geometry.workspace import PIN_LENGTH, in_holes
+from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.physics.protocol import BackendState
+from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
+from tolins.physics.schedule import check_control_dt
+
+#: Largest noise std of any measured quantity (mm, rad, N, N·mm): far beyond any sensor,
+#: it keeps every observation finite.
+MAX_NOISE_STD = 1e3
+
+
+@dataclass(frozen=True, eq=False)
+class TaskSettings:
+    """Validated settings of one insertion task (see ``InsertionEnv`` for their meaning).
+
+    Attributes:
+        socket: The nominal socket.
+        measurement_noise: Pose noise std ``[x, y, theta, z]`` (mm, rad); a scalar broadcasts.
+        force_noise: Wrench noise std ``[Fx, Fy, q_theta, Fz]`` (N, N·mm). Each std in
+            ``[0, MAX_NOISE_STD]``.
+        horizon: Steps before truncation (k_max).
+        success_depth: Depth of the pin tips below the board that counts as success (mm),
+            less than the pins' length (the carrier stops the tips at ``z = -4``).
+        collision_force: Summed normal contact force above which a step collides (N).
+        defect_sigma: Bent-pin std (mm) re-drawn every episode, or ``None``; at most the
+            socket's :func:`~tolins.geometry.defects.max_defect_sigma` (a workpiece with a
+            pin out of its cell is re-drawn, :func:`~tolins.geometry.defects.sample_defects`).
+        initial_pose: Distribution of the initial pose around the goal.
+        control_dt: Control period (s), see :func:`~tolins.physics.schedule.check_control_dt`.
+        reward_mode: ``sparse`` (the paper's), ``dense`` or ``normalized_dense``
+            (:mod:`tolins.envs.reward`).
+        randomization: Physics drawn per episode (:mod:`tolins.physics.randomization`), or
+            ``None`` (the paper's fixed setting).
+        defects: Another kind of defect drawn every episode, ``(kind, sigma)`` as
+            :func:`~tolins.geometry.defects.sample_defects` takes them (e.g. ``("burr",
+            0.05)``, ``("blocked", None)``), after any bent pins of ``defect_sigma``; or
+            ``None``.
+    """
+
+    socket: SocketSpec
+    measurement_noise: Any = field(default_factory=POSE_NOISE_STD.copy)
+    force_noise: Any = 0.0
+    horizon: int = HORIZON
+    success_depth: float = 1.0
+    collision_force: float = 0.5
+    defect_sigma: float | None = None
+    initial_pose: InitialPoseDistribution | None = None
+    control_dt: float = CONTROL_DT
+    reward_mode: str = "sparse"
+    randomization: Any = None
+    defects: Any = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        if not isinstance(self.socket, (CircularSocket, PolygonSocket)):
+            raise ValueError(f"socket={self.socket!r}; allowed: a CircularSocket or PolygonSocket")
+        if self.defect_sigma is not None:
+            if not isinstance(self.socket, CircularSocket):
+                raise ValueError("defect_sigma is set but only a CircularSocket has bent pins")
+            sigma = check_defect_sigma(self.socket, self.defect_sigma, "defect_sigma")
+            set_(self, "defect_sigma", sigma)
+        if self.defects is not None:
+            set_(self, "defects", check_defects(self.socket, self.defects))
+        for name, what in (
+            ("measurement_noise", "[x, y, theta, z]"),
+            ("force_noise", "[Fx, Fy, q_theta, Fz]"),
+        ):
+            allowed = f"0 ≤ std ≤ {MAX_NOISE_STD:g} for {what}"
+            std = finite_vector(name, getattr(self, name), 4, allowed)
+            if np.any(std < 0) or np.any(std > MAX_NOISE_STD):
+                raise ValueError(f"{name}={std.tolist()!r} is out of range; allowed: {allowed}")
+            set_(self, name, std)
+        set_(self, "horizon", check_int("horizon", self.horizon, minimum=1))
+        set_(self, "success_depth", check_positive("success_depth", self.success_depth))
+        if self.success_depth >= PIN_LENGTH:
+            raise ValueError(
+                f"success_depth={self.success_depth!r} cannot be reached: the carrier stops the "
+                f"pin tips at z = -{PIN_LENGTH:g} mm; allowed: 0 < success_depth < {PIN_LENGTH:g}"
+            )
+        set_(self, "collision_force", check_positive("collision_force", self.collision_force, "N"))
+        set_(self, "initial_pose", check_initial_pose(self.initial_pose))
+        set_(self, "control_dt", check_control_dt(self.control_dt))
+        set_(self, "reward_mode", check_reward_mode(self.reward_mode))
+        set_(self, "randomization", PhysicsRandomization.of(self.randomization))
+        if self.randomization is not None and self.randomization.pose_spread is not None:
+            widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
+            try:
+                check_initial_pose(widest)
+            except ValueError as error:
+                raise ValueError(f"randomization.pose_spread: {error}") from None
+        set_(self, "_noise_std", np.concatenate([self.measurement_noise, self.force_noise]))
+
+    def draw_socket(self, rng: np.random.Generator) -> SocketSpec:
+        """The episode's workpiece: a fresh bent-pin copy with ``defect_sigma``, then a draw of
+        ``defects``' kind, else nominal."""
+        socket = self.socket
+        if self.defect_sigma is not None:
+            socket = sample_defects(socket, self.defect_sigma, rng)
+        if self.defects is not None:
+            socket = sample_defects(socket, self.defects[1], rng, kind=self.defects[0])
+        return socket
+
+    def draw_physics(self, rng: np.random.Generator) -> PhysicsDraw | None:
+        """The episode's randomised physics (``None`` without ``randomization``)."""
+        return None if self.randomization is None else self.randomization.sample(rng)
+
+    def pose_distribution(self, physics: PhysicsDraw | None) -> InitialPoseDistribution:
+        """The initial-pose distribution of an episode whose physics draw is ``physics``
+        (its pose spread widens or narrows :attr:`initial_pose`)."""
+        if physics is None or physics.pose_spread is None:
+            return self.initial_pose
+        return spread_pose(self.initial_pose, physics.pose_spread)
+
+    def is_success(self, state: BackendState, socket: SocketSpec | None = None) -> bool:
+        """Every pin of ``socket`` (the episode's workpiece, default the nominal one) inside
+        its own hole, ``success_depth`` deep (:func:`~tolins.geometry.workspace.in_holes`)."""
+        return bool(in_holes(socket or self.socket, state.pose, self.success_depth))
+
+    def observe(
+        self, state: BackendState, goal: np.ndarray, rng: np.random.Generator
+    ) -> np.ndarray:
+        """``[x̂−x*, ŷ−y*, θ̂−θ*, ẑ, F̂x, F̂y, q̂θ, F̂z]`` with the measurement noise."""
+        exact = np.concatenate([state.pose[:3] - goal, state.pose[3:], state.wrench])
+        return exact + rng.normal(0.0, 1.0, 8) * self._noise_std
+
+
+def setting(name: str) -> property:
+    """A read-only attribute: ``TaskSettings.<name>`` of its owner's ``settings``."""
+    return property(lambda self: getattr(self.settings, name), doc=f"See ``TaskSettings.{name}``.")
+
+
+class SettingsAttributes:
+    """The task's settings as read-only attributes of an owner that has ``settings`` (a
+    :class:`TaskSettings`): what the gym env and each env of the vector env answer alike.
+    ``nominal_socket`` is the settings' socket, before any episode's defects."""
+
+    nominal_socket = setting("socket")
+    measurement_noise = setting("measurement_noise")
+    force_noise = setting("force_noise")
+    horizon = setting("horizon")
+    success_depth = setting("success_depth")
+    collision_force = setting("collision_force")
+    defect_sigma = setting("defect_sigma")
+    initial_pose = setting("initial_pose")
+    reward_mode = setting("reward_mode")
+    randomization = setting("randomization")
+    defects = setting("defects")
+
+
+#: The keywords of :class:`TaskSettings` an env takes besides its socket.
+TASK_KEYWORDS = tuple(f.name for f in fields(TaskSettings) if f.init and f.name != "socket")
+
+
+def check_keywords(owner: str, given: dict[str, Any], allowed: Iterable[str]) -> None:
+    """``ValueError`` naming the keywords of ``given`` that ``owner`` does not take, with the
+    ones it takes (not their values: a socket or a distribution prints long)."""
+    allowed = sorted(allowed)
+    unknown = sorted(set(given) - set(allowed))
+    if unknown:
+        names = ", ".join(map(repr, unknown))
+        plural = "s" if len(unknown) > 1 else ""
+        raise ValueError(
+            f"{owner} got unknown keyword{plural} {names}; allowed: {', '.join(allowed)}"
+        )

@@ -1,0 +1,51 @@
+"""The configuration of an SB3 baseline run (:mod:`tolins.learning.agents.sb3`); importable
+without stable-baselines3."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from tolins.envs.reward import check_reward_mode
+from tolins.geometry.validation import check_int, check_seed
+
+ALGORITHM_NAMES = ("ppo", "sac")
+#: The trained model in a run's folder (an SB3 zip) and its learning curve.
+MODEL = "model.zip"
+CURVES = "curves.csv"
+
+
+@dataclass(frozen=True)
+class Sb3Config:
+    """One SB3 training run.
+
+    Attributes:
+        algorithm: ``ppo`` or ``sac`` (SB3 defaults otherwise, ``MlpPolicy``).
+        env_id: Training env (gymnasium id).
+        backend: ``mujoco`` or ``kinematic``.
+        reward_mode: The reward it learns from (:mod:`tolins.envs.reward`).
+        env_steps: Training budget in env steps (control steps).
+        curve_every: Env steps between two points of the learning curve.
+        curve_episodes: Sparse-reward episodes per point.
+        seed: Seed of the model and the training env.
+        n_envs: Training envs stepped side by side (one batch: SB3's ``n_envs``; PPO
+            collects ``n_steps`` per env, SAC one transition per env per step).
+    """
+
+    algorithm: str
+    env_id: str
+    backend: str = "mujoco"
+    reward_mode: str = "dense"
+    env_steps: int = 100_000
+    curve_every: int = 10_000
+    curve_episodes: int = 8
+    seed: int = 0
+    n_envs: int = 1
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHM_NAMES:
+            allowed = ", ".join(ALGORITHM_NAMES)
+            raise ValueError(f"algorithm={self.algorithm!r}; allowed: {allowed}")
+        check_reward_mode(self.reward_mode)
+        for name in ("env_steps", "curve_every", "curve_episodes", "n_envs"):
+            check_int(name, getattr(self, name), minimum=1)
+        check_seed("seed", self.seed)

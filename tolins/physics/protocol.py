@@ -1,0 +1,130 @@
+"""What a simulator offers the envs, whatever simulates it: one workpiece or a batch of them.
+
+A :class:`Backend` simulates one workpiece over one board (the single env's); a
+:class:`BatchPhysics` holds ``num_envs`` simulations of one socket family (the same model
+layout; each simulation may have its own workpiece, e.g. a bent-pin draw) and resets and
+steps any subset of them per call (the vector env's). Every row a batch gives back means
+what a :class:`BackendState` means for one workpiece, so the task logic (noise, reward,
+success) is the same over both.
+
+Each simulator class declares what it can do as class attributes (:class:`Capabilities`),
+so the envs ask the class, never its name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Protocol
+
+import numpy as np
+
+from tolins.geometry.specs import SocketSpec
+
+if TYPE_CHECKING:
+    from tolins.physics.randomization import PhysicsDraw
+
+
+@dataclass(frozen=True)
+class BackendState:
+    """The workpiece after a reset or a control step.
+
+    Attributes:
+        pose: True pose ``[x, y, theta, z]`` (mm, rad).
+        wrench: Force and torque the board exerts on the workpiece at the end of the
+            step, world axes, about the workpiece origin: ``[Fx, Fy, q_theta, Fz]`` (N, N·mm).
+        peak_force: Largest summed normal force (N) of the contacts between the board
+            and the pins seen during the step.
+        error: ``None``, or what went wrong in the simulator (the state is then invalid).
+    """
+
+    pose: np.ndarray
+    wrench: np.ndarray
+    peak_force: float
+    error: str | None = None
+
+
+@dataclass(frozen=True)
+class BatchState:
+    """The workpieces of the simulations a call touched, one row each, in the call's order.
+
+    Attributes:
+        pose: ``(n, 4)`` true poses ``[x, y, theta, z]`` (mm, rad).
+        wrench: ``(n, 4)`` ``[Fx, Fy, q_theta, Fz]`` (N, N·mm), as ``BackendState.wrench``.
+        peak_force: ``(n,)`` largest summed normal pin force during the step (N).
+        errors: ``n`` entries: ``None``, or what went wrong in that simulation (its row
+            is then invalid, as ``BackendState.error``).
+    """
+
+    pose: np.ndarray
+    wrench: np.ndarray
+    peak_force: np.ndarray
+    errors: tuple[str | None, ...] | None = None
+
+    def row(self, i: int) -> BackendState:
+        """Row ``i`` as the single env's :class:`BackendState`."""
+        error = None if self.errors is None else self.errors[i]
+        return BackendState(self.pose[i], self.wrench[i], float(self.peak_force[i]), error)
+
+
+class Capabilities:
+    """What a simulator class can do, as class attributes (every simulator sets each).
+
+    Attributes:
+        supports_render: Its simulations can be drawn: the model and a posed data of one
+            (``model``/``data`` of a backend, ``drawing(index)`` of a batch).
+        supports_randomization: It takes randomised-physics draws (``set_physics``; a
+            simulator without friction, stiffness or servos ignores their terms).
+        supports_touch_points: It reports each pin's contact force and touch point
+            (``pin_forces``, ``pin_touch_points``).
+        defect_kinds: The defect kinds (:data:`~tolins.geometry.defects.DEFECT_KINDS`) a
+            simulation takes as its workpiece (``set_socket``; a single backend swaps its
+            whole model and data, so every kind).
+        batch_options: The keywords of the vector env it takes besides the socket, the
+            number of simulations and the control period (``num_threads``, ``device``,
+            ``persistent``).
+    """
+
+    supports_render: ClassVar[bool]
+    supports_randomization: ClassVar[bool]
+    supports_touch_points: ClassVar[bool]
+    defect_kinds: ClassVar[frozenset[str]]
+    batch_options: ClassVar[frozenset[str]] = frozenset()
+
+
+class Backend(Protocol):
+    """A simulator of one workpiece over one board."""
+
+    spec: SocketSpec
+
+    def set_socket(self, socket: SocketSpec) -> None:
+        """Simulate ``socket`` (``spec`` from now on) from the next reset on."""
+
+    def set_physics(self, draw: PhysicsDraw | None) -> None:
+        """Apply a randomised-physics ``draw`` (``None``: nominal) before the next reset."""
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        """Place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
+
+    def step(self, velocity: np.ndarray) -> BackendState:
+        """Command ``velocity`` ``[ux, uy, utheta, uz]`` for one control period."""
+
+
+class BatchPhysics(Protocol):
+    """``num_envs`` simulations of one socket family, reset and stepped by index."""
+
+    num_envs: int
+
+    def set_socket(self, index: int, socket: SocketSpec) -> None:
+        """Simulate ``socket`` (a workpiece of the batch's family) in simulation ``index``
+        from its next reset on."""
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        """Place simulation ``ids[k]``'s workpiece at ``poses[k]`` ``[x, y, theta, z]`` at
+        rest (``poses``: ``(len(ids), 4)``)."""
+
+    def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
+        """Command ``velocities[k]`` ``[ux, uy, utheta, uz]`` to simulation ``ids[k]`` for
+        one control period; the other simulations do not move."""
+
+    def close(self) -> None:
+        """Release threads, devices and buffers."""

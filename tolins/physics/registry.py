@@ -1,0 +1,100 @@
+"""The simulators by name: the one table the single env, the vector env and the bench read.
+
+Each :class:`Simulator` pairs a single-env backend (``None`` where there is none) with a
+batch of the vector env; what each can do is declared on its classes
+(:class:`~tolins.physics.protocol.Capabilities`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from tolins.geometry.specs import SocketSpec
+from tolins.physics.kinematic import KinematicBackend, KinematicBatch
+from tolins.physics.mujoco import MujocoBackend, MujocoBatch
+from tolins.physics.protocol import Backend, BatchPhysics
+from tolins.physics.warp import WarpBatch
+
+
+@dataclass(frozen=True)
+class Simulator:
+    """One simulator.
+
+    Attributes:
+        name: Its ``backend=`` name.
+        batch: The vector env's batch class: ``batch(socket, num_envs, control_dt,
+            **options)`` with the options of its ``batch_options``.
+        single: The single env's backend class, ``single(spec, control_dt)``; ``None`` for
+            a simulator that only runs batches.
+    """
+
+    name: str
+    batch: type[Any]
+    single: type[Any] | None = None
+
+
+#: Every simulator, by name, in the order they are listed to users.
+SIMULATORS: dict[str, Simulator] = {
+    s.name: s
+    for s in (
+        Simulator("mujoco", MujocoBatch, MujocoBackend),
+        Simulator("kinematic", KinematicBatch, KinematicBackend),
+        Simulator("warp", WarpBatch),  # needs pip install 'tolins[warp]'
+    )
+}
+#: The simulators of the single env (and of everything built on it, such as the bench).
+BACKENDS = tuple(name for name, s in SIMULATORS.items() if s.single is not None)
+#: The simulators of the vector env.
+BATCH_BACKENDS = tuple(SIMULATORS)
+
+
+def simulator(name: object, *, single: bool = False) -> Simulator:
+    """The simulator ``name`` (of the single env with ``single``); ``ValueError`` naming the
+    allowed ones otherwise."""
+    names = BACKENDS if single else BATCH_BACKENDS
+    if not isinstance(name, str) or name not in names:
+        allowed = sorted(names) if single else ", ".join(map(repr, names))
+        raise ValueError(f"backend={name!r}; allowed: {allowed}")
+    return SIMULATORS[name]
+
+
+def with_capability(capability: str) -> tuple[str, ...]:
+    """The names of the simulators whose batch has ``capability`` (a flag of
+    :class:`~tolins.physics.protocol.Capabilities`) set."""
+    return tuple(name for name, s in SIMULATORS.items() if getattr(s.batch, capability))
+
+
+def taking(option: str) -> tuple[str, ...]:
+    """The names of the simulators whose batch takes the keyword ``option``."""
+    return tuple(name for name, s in SIMULATORS.items() if option in s.batch.batch_options)
+
+
+def make_backend(name: str, spec: SocketSpec, control_dt: float) -> Backend:
+    """The single env's backend ``name`` for ``spec``."""
+    return simulator(name, single=True).single(spec, control_dt)
+
+
+def make_batch(
+    name: str,
+    socket: SocketSpec,
+    num_envs: int,
+    control_dt: float,
+    *,
+    num_threads: int | None = None,
+    device: str | None = None,
+    persistent: bool = False,
+) -> BatchPhysics:
+    """The batch ``name`` of ``num_envs`` copies of ``socket``.
+
+    ``num_threads`` and ``persistent`` (every simulation's whole data kept, for drawing)
+    are hints that a simulator without threads or without per-simulation data ignores;
+    ``device`` names hardware, so a simulator that runs on none refuses it.
+    """
+    cls = simulator(name).batch
+    if device is not None and "device" not in cls.batch_options:
+        on = " or ".join(map(repr, taking("device")))
+        raise ValueError(f"device={device!r} is for backend={on} only; got backend={name!r}")
+    given = {"num_threads": num_threads, "device": device, "persistent": persistent}
+    options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
+    return cls(socket, num_envs, control_dt, **options)

@@ -1,0 +1,339 @@
+"""The MuJoCo control step: socket models stepped one control period at a time.
+
+:func:`servo_control_step` is the control step of every MuJoCo stepper, written once:
+re-anchor the servos, run the physics steps in chunks with the summed pin force read after
+each, report the peak and any fault. It drives :class:`ServoSimulations`, implemented by
+:class:`ServoStepper` (one ``MjModel``/``MjData`` pair: the single env's
+:class:`~tolins.physics.mujoco.MujocoBackend` and the dm_control physics) and by
+:class:`BatchServo` (many simulations on ``mujoco.batch``, for
+:class:`~tolins.physics.mujoco.MujocoBatch`). This is the one module that calls
+``mj_step`` or builds a ``mujoco.batch.Batch``. The helpers here (wrench, faults, touch
+points) are shared by every MuJoCo stepper.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Iterable, Iterator
+from typing import Protocol
+
+import mujoco
+import mujoco.batch
+import numpy as np
+
+from tolins.geometry.validation import check_int
+from tolins.mjcf import FORCE_SCALE, model_layout
+from tolins.physics.protocol import BackendState
+from tolins.physics.schedule import CONTACT_CHECKS, contact_chunks
+
+#: ``opt.disableflags`` bit that turns off every sensor.
+_SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+
+
+@contextlib.contextmanager
+def sensors_off(models: Iterable[mujoco.MjModel]) -> Iterator[None]:
+    """The models' sensors switched off inside the block (lazy sensors: the state and every
+    value read later are the same bit for bit), their flags restored after it."""
+    flags = [(model, model.opt.disableflags) for model in models]
+    for model, value in flags:
+        model.opt.disableflags = value | _SENSORS_OFF
+    try:
+        yield
+    finally:
+        for model, value in flags:
+            model.opt.disableflags = value
+
+
+def board_wrench(theta: float, force: list[float], torque_z: float) -> np.ndarray:
+    """``[Fx, Fy, q_theta, Fz]`` (N, N·mm, world axes) the board exerts on the workpiece,
+    from the force sensor's ``force`` (workpiece axes, rotated by ``theta``) and the z
+    torque (model units); the one conversion of every MuJoCo stepper."""
+    fx, fy, fz = force
+    c, s = math.cos(theta), math.sin(theta)
+    wrench = np.array([s * fy - c * fx, -s * fx - c * fy, -torque_z, -fz])
+    return wrench * FORCE_SCALE
+
+
+def simulation_fault(
+    warnings_before: int, warnings: list[int], qpos: np.ndarray, qvel: np.ndarray
+) -> str | None:
+    """What went wrong in a control step, or ``None``: a MuJoCo warning raised during it
+    (``warnings``: the counter of each ``mjtWarning`` now, their sum was
+    ``warnings_before``), else a non-finite state."""
+    if sum(warnings) != warnings_before:
+        raised = [mujoco.mjtWarning(i).name for i, number in enumerate(warnings) if number > 0]
+        return f"MuJoCo warning during the step: {', '.join(raised)}"
+    if not math.isfinite(sum(qpos.tolist()) + sum(qvel.tolist())):
+        return "non-finite MuJoCo state"
+    return None
+
+
+def pin_touch_points(
+    model: mujoco.MjModel, data: mujoco.MjData, pin_geoms: dict[int, int]
+) -> np.ndarray:
+    """Where each pin presses on the board in ``data``: ``(n_pins, 2)`` world ``(x, y)`` (mm),
+    the normal-force-weighted mean of its contact points; NaN for a pin without contact
+    force. ``pin_geoms``: pin index by geom id."""
+    n_pins = len(pin_geoms)
+    weighted, total = np.zeros((n_pins, 2)), np.zeros(n_pins)
+    force = np.zeros(6)
+    for k in range(data.ncon):
+        contact = data.contact[k]
+        pin = pin_geoms.get(contact.geom1, pin_geoms.get(contact.geom2))
+        if pin is None:
+            continue
+        mujoco.mj_contactForce(model, data, k, force)
+        weighted[pin] += force[0] * contact.pos[:2]
+        total[pin] += force[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(total[:, None] > 0, weighted / total[:, None], np.nan)
+
+
+class ServoSimulations(Protocol):
+    """The simulations one :func:`servo_control_step` drives (one, or a batch's subset)."""
+
+    def warning_counts(self) -> list[int]:
+        """Each simulation's number of MuJoCo warnings so far."""
+
+    def anchor(self) -> None:
+        """Reset every servo's integrated set-point to its joint's position."""
+
+    def no_force(self) -> float | np.ndarray:
+        """The peak force before the first read (zero per simulation)."""
+
+    def physics_steps(self, n: int) -> None:
+        """``n`` physics steps under the current command, the sensors computed in the last."""
+
+    def higher_force(self, peak: float | np.ndarray) -> float | np.ndarray:
+        """``max(peak, the summed touch force now)`` per simulation (model units)."""
+
+    def faults(self, warnings_before: list[int]) -> tuple[str | None, ...]:
+        """What went wrong in each simulation since ``warnings_before`` (see
+        :func:`simulation_fault`)."""
+
+
+def servo_control_step(
+    sims: ServoSimulations, nstep: int, checks: int
+) -> tuple[float | np.ndarray, tuple[str | None, ...]]:
+    """One control step of ``nstep`` physics steps under the commanded velocities: the
+    servos re-anchored (so a blocked workpiece stops at the first contact and pushes with
+    at most the servo's force limit instead of winding up), then ``checks`` chunks of
+    physics steps (:func:`~tolins.physics.schedule.contact_chunks`), the summed normal pin
+    force read after each. Returns the peak force (model units) and the faults."""
+    before = sims.warning_counts()
+    sims.anchor()
+    peak = sims.no_force()
+    for n in contact_chunks(nstep, checks):
+        sims.physics_steps(n)
+        peak = sims.higher_force(peak)
+    return peak, sims.faults(before)
+
+
+class ServoStepper:
+    """The control step of a socket model, on a ``MjModel``/``MjData`` pair it does not own.
+
+    At the start of every control step each servo's integrated set-point is reset to
+    the joint's current position, then the commanded velocity is integrated over the
+    step. A blocked workpiece so stops at the first contact and pushes with at most
+    the servo's force limit instead of winding up. The summed normal force of the
+    pins' contacts is read after each of ``contact_checks`` chunks of physics steps per
+    control step, for ``peak_force``: chunks of ``nstep // contact_checks`` steps, the first
+    ``nstep % contact_checks`` one step longer, so ``min(contact_checks, nstep)`` reads
+    (evenly spaced whenever ``contact_checks`` divides ``nstep``: 5 reads 50 steps apart
+    at the default 0.25 s).
+
+    Args:
+        model: A model made by :func:`tolins.make_mjcf`.
+        data: Its data; read and written in place.
+        contact_checks: Contact-force reads per control step (at most).
+    """
+
+    def __init__(
+        self, model: mujoco.MjModel, data: mujoco.MjData, contact_checks: int = CONTACT_CHECKS
+    ) -> None:
+        contact_checks = check_int("contact_checks", contact_checks, minimum=1)
+        self.checks = contact_checks
+        self._bind(model, data)
+
+    def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Hold ``model`` and ``data`` and the views into ``data`` that the steps read."""
+        self.model = model
+        self.data = data
+        self.layout = layout = model_layout(model)
+        # Views into MjData's buffers (valid for its lifetime): the hot loop reads them
+        # without building new arrays.
+        self._touch = data.sensordata[layout.touch]
+        self._wrench = data.sensordata[layout.force]
+        self._warnings = data.warning.number
+
+    #: Attributes that view MjData's buffers: pickled, they would become frozen copies.
+    _VIEWS = ("_touch", "_wrench", "_warnings")
+
+    def __getstate__(self) -> dict[str, object]:
+        # A copy keeps the model, the data (MjData pickles its whole state, the solver's
+        # warm start included) and the settings, and binds new views into its own data.
+        return {k: v for k, v in self.__dict__.items() if k not in self._VIEWS}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._bind(self.model, self.data)
+
+    def state(self, peak_force: float, error: str | None = None) -> BackendState:
+        """The workpiece now: pose, wrench (N, N·mm, world axes) and the given peak force."""
+        d, layout = self.data, self.layout
+        theta = d.qpos[layout.pose_joint[2]]
+        wrench = board_wrench(theta, self._wrench.tolist(), d.sensordata[layout.torque_z])
+        return BackendState(
+            pose=d.qpos[layout.pose_joint], wrench=wrench, peak_force=peak_force, error=error
+        )
+
+    def contact_force(self) -> float:
+        """Summed normal contact force on all pins now (N)."""
+        return sum(self._touch.tolist()) * FORCE_SCALE
+
+    def pin_forces(self) -> np.ndarray:
+        """Summed normal contact force on each pin now (N), ``(n_pins,)``."""
+        return self._touch * FORCE_SCALE
+
+    def pin_touch_points(self) -> np.ndarray:
+        """Where each pin presses on the board now (see :func:`pin_touch_points`)."""
+        return pin_touch_points(self.model, self.data, self.layout.pin_by_geom)
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
+        d.act[:] = d.qpos
+        mujoco.mj_forward(m, d)
+        return self.state(self.contact_force())
+
+    def command(self, velocity: np.ndarray) -> None:
+        """Set the servos' velocity ``[ux, uy, utheta, uz]`` (mm/s, rad/s)."""
+        self.data.ctrl[:] = np.asarray(velocity, dtype=float)[self.layout.joint_pose]
+
+    def advance(self, nstep: int) -> BackendState:
+        """Re-anchor the servos and run ``nstep`` physics steps under the current command
+        (:func:`servo_control_step`)."""
+        peak, (fault,) = servo_control_step(self, nstep, self.checks)
+        return self.state(peak * FORCE_SCALE, fault)
+
+    #: Compute the sensors only in the last physics step before each read of them: the
+    #: state and every value read are the same bit for bit (sensors do not act on the
+    #: state), and the touch sensors cost O(pins × contacts) per step. ``False``: in
+    #: every step (for side-by-side benchmarks). :class:`BatchServo` follows it too.
+    lazy_sensors = True
+
+    # The ServoSimulations of one simulation.
+
+    def warning_counts(self) -> list[int]:
+        return [sum(self._warnings.tolist())]
+
+    def anchor(self) -> None:
+        self.data.act[:] = self.data.qpos
+
+    def no_force(self) -> float:
+        return 0.0
+
+    def physics_steps(self, n: int) -> None:
+        """``n`` physics steps. With :attr:`lazy_sensors` the model's sensors are switched
+        off for all but the last, so the model must not be stepped elsewhere meanwhile."""
+        m, d = self.model, self.data
+        if self.lazy_sensors and n > 1:
+            with sensors_off([m]):
+                mujoco.mj_step(m, d, nstep=n - 1)
+            n = 1
+        mujoco.mj_step(m, d, nstep=n)
+
+    def higher_force(self, peak: float) -> float:
+        return max(peak, sum(self._touch.tolist()))
+
+    def faults(self, warnings_before: list[int]) -> tuple[str | None]:
+        d = self.data
+        return (simulation_fault(warnings_before[0], self._warnings.tolist(), d.qpos, d.qvel),)
+
+    def step(self, velocity: np.ndarray, nstep: int) -> BackendState:
+        """Command ``velocity`` ``[ux, uy, utheta, uz]`` for ``nstep`` physics steps."""
+        self.command(velocity)
+        return self.advance(nstep)
+
+
+def sequential_sum(columns: np.ndarray) -> np.ndarray:
+    """Row sums of ``columns`` ``(n, k)`` added left to right, as Python's ``sum`` of a row
+    (numpy's pairwise sum rounds differently from 8 columns on)."""
+    total = np.zeros(len(columns))
+    for j in range(columns.shape[1]):
+        total += columns[:, j]
+    return total
+
+
+class BatchServo:
+    """``num_envs`` simulations on one ``mujoco.batch.Batch`` (a native thread pool, the GIL
+    released), stepped by :func:`servo_control_step` as :class:`ServoStepper` steps one:
+    ``mujoco.batch`` is bit-identical to a loop of ``mj_step`` over one ``MjData`` per
+    simulation at any thread count.
+
+    Args:
+        model: The model every simulation starts on (:meth:`set_models` replaces them).
+        num_envs: Number of simulations.
+        num_threads: Threads of the batch, including the caller's.
+        persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``).
+    """
+
+    def __init__(
+        self, model: mujoco.MjModel, num_envs: int, num_threads: int, persistent: bool
+    ) -> None:
+        self.batch = b = mujoco.batch.Batch(
+            model, num_envs, nthread=num_threads, persistent=persistent
+        )
+        self.layout = model_layout(model)
+        self.models = [model] * num_envs
+        b.set_models(self.models)
+        self.qpos, self.qvel = b.bind("qpos"), b.bind("qvel")
+        self.act, self.ctrl = b.bind("act"), b.bind("ctrl")
+        self.sensordata = b.bind("sensordata")
+        self.ids = np.zeros(0, dtype=np.intp)
+
+    def set_models(self, models: list[mujoco.MjModel]) -> None:
+        """Run simulation ``i`` on ``models[i]`` (one layout; read live by the batch)."""
+        self.models = models
+        self.batch.set_models(models)
+
+    def step(self, ids: np.ndarray, nstep: int, checks: int) -> tuple[np.ndarray, tuple]:
+        """:func:`servo_control_step` of simulations ``ids`` under their commands."""
+        self.ids = ids
+        return servo_control_step(self, nstep, checks)
+
+    # The ServoSimulations of the simulations ``self.ids``.
+
+    def warning_counts(self) -> list[int]:
+        warning = self.batch.warning
+        return [sum(warning[i, :, 1].tolist()) for i in self.ids.tolist()]
+
+    def anchor(self) -> None:
+        self.act[self.ids] = self.qpos[self.ids]
+
+    def no_force(self) -> np.ndarray:
+        return np.zeros(len(self.ids))
+
+    def physics_steps(self, n: int) -> None:
+        """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``."""
+        ids = self.ids
+        if ServoStepper.lazy_sensors and n > 1:
+            models = {id(self.models[i]): self.models[i] for i in ids.tolist()}.values()
+            with sensors_off(models):
+                self.batch.step(ids, nstep=n - 1)
+            n = 1
+        self.batch.step(ids, nstep=n)
+
+    def higher_force(self, peak: np.ndarray) -> np.ndarray:
+        touch = sequential_sum(self.sensordata[self.ids, self.layout.touch])
+        return np.where(touch > peak, touch, peak)  # max(peak, touch), as Python's
+
+    def faults(self, warnings_before: list[int]) -> tuple[str | None, ...]:
+        warning = self.batch.warning
+        return tuple(
+            simulation_fault(b, warning[i, :, 1].tolist(), self.qpos[i], self.qvel[i])
+            for b, i in zip(warnings_before, self.ids.tolist(), strict=True)
+        )

@@ -6,6 +6,7 @@ Usage::
     python benchmarks/env_throughput.py --quick    # a few seconds, a smoke test
     python benchmarks/env_throughput.py --steps 20 --min-time 2
     python benchmarks/env_throughput.py --models-only   # part 2 alone
+    python benchmarks/env_throughput.py --against a110726   # this tree against a revision
 
 What it measures, all in one run:
 
@@ -517,7 +518,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--models-only", action="store_true", help="only part 2 (old vs new control step)"
     )
+    parser.add_argument(
+        "--against",
+        metavar="REV",
+        help="only the single env on this tree against revision REV, side by side "
+        "(benchmarks/env_versions.py)",
+    )
     args = parser.parse_args(argv)
+    if args.against:
+        import env_versions  # beside this script
+
+        env_versions.main(["--rev", args.against, "--steps", str(args.steps)])
+        return 0
     if args.quick:
         args.steps, args.repeats, args.min_time, args.thread_steps = 4, 2, 0.02, 16
     if min(args.steps, args.repeats, args.thread_steps, args.envs, args.threads) < 1:

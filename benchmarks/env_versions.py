@@ -62,12 +62,12 @@ def _block(root: Path, regime: str, steps: int) -> tuple[float, list[float]]:
     return result["seconds"] / steps, result["pose"]
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rev", default="a110726", help="the revision to compare against")
     parser.add_argument("--blocks", type=int, default=10, help="timed blocks per tree and regime")
     parser.add_argument("--steps", type=int, default=40, help="control steps per block")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="tolins-old-") as folder:
         old = Path(folder) / "tree"
         subprocess.run(

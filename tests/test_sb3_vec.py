@@ -45,3 +45,25 @@ def test_ppo_learns_on_several_envs_of_one_batch() -> None:
     assert model.num_timesteps == 256
     action, _ = model.predict(env.reset(), deterministic=True)
     assert action.shape == (4, 4) and np.all(np.abs(action) <= 1)
+
+
+def test_get_attr_and_set_attr_answer_per_env_as_a_dummy_vec_env() -> None:
+    env_id, n = "tolins/Circle2x1Defective-v1", 3
+    ours = Sb3VectorEnv(env_id, n, backend="kinematic")
+    theirs = DummyVecEnv([lambda: agent_env(env_id, backend="kinematic")] * n)
+    ours.seed(5)
+    theirs.seed(5)
+    ours.reset()
+    theirs.reset()
+    # each env's own bent workpiece, as DummyVecEnv's envs hold theirs
+    assert ours.get_attr("socket") == theirs.get_attr("socket")
+    assert len(set(map(repr, ours.get_attr("socket")))) == n
+    assert ours.get_attr("socket", indices=[2]) == theirs.get_attr("socket", indices=[2])
+    goal = np.array([0.05, -0.05, 0.01])
+    ours.set_attr("goal", goal, indices=[1])
+    theirs.set_attr("goal", goal, indices=[1])
+    for mine, expected in zip(ours.get_attr("goal"), theirs.get_attr("goal"), strict=True):
+        assert np.array_equal(mine, expected)
+    assert np.array_equal(ours.get_attr("goal")[1], goal)
+    assert not np.array_equal(ours.get_attr("goal")[0], goal)
+    assert ours.get_attr("spec") == [ours.vector.unwrapped.spec] * n  # the batch's own

@@ -22,6 +22,7 @@ import numpy as np
 
 from tolins.envs.tasks import check_env_id, make_vec
 from tolins.envs.vector import InsertionVectorEnv
+from tolins.physics.registry import taking
 from tolins.rollouts.collectors import Collector
 from tolins.rollouts.episodes import Episode, EpisodeRun, Policy
 from tolins.rollouts.infos import InfoRow
@@ -63,7 +64,7 @@ class VectorEnvCache:
     def get(self, env_id: str) -> InsertionVectorEnv:
         if env_id not in self._envs:
             kwargs = {**self.env_kwargs, "backend": self.backend, "autoreset_mode": "Disabled"}
-            if self.backend == "mujoco":
+            if self.backend in taking("num_threads"):
                 kwargs["num_threads"] = self.num_threads
             self._envs[env_id] = make_vec(check_env_id(env_id), self.num_envs, **kwargs).unwrapped
         return self._envs[env_id]

@@ -80,10 +80,23 @@ class Sb3VectorEnv(VecEnv):
         self.vector.close()
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.vector.unwrapped, attr_name) for _ in self._indices(indices)]
+        """Env ``i``'s ``attr_name`` (the vector env's ``get_attr``), or the batch's own
+        attribute where no env has one of its own (``spec``, ``backend``)."""
+        vector = self.vector.unwrapped
+        try:
+            values = vector.get_attr(attr_name)
+        except AttributeError:
+            return [getattr(vector, attr_name) for _ in self._indices(indices)]
+        return [values[i] for i in self._indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-        raise AttributeError(f"set_attr({attr_name!r}): the batched envs have no such attributes")
+        """Set ``attr_name`` of the envs ``indices`` to ``value`` (the vector env's
+        ``set_attr``: ``goal`` and ``np_random``); the other envs keep theirs."""
+        vector = self.vector.unwrapped
+        values = list(vector.get_attr(attr_name))
+        for i in self._indices(indices):
+            values[i] = value
+        vector.set_attr(attr_name, values)
 
     def env_method(self, method_name: str, *args, indices: Any = None, **kwargs) -> list[Any]:
         raise AttributeError(f"env_method({method_name!r}): call the vector env (.vector) instead")

@@ -25,6 +25,7 @@ from tolins.bench.table.results import row_entry
 from tolins.bench.table.rows import CIRCLE_2X2, Row
 from tolins.envs.tasks import DEFECT_SIGMA
 from tolins.geometry.specs import GRADES_UM
+from tolins.physics.registry import simulator
 from tolins.rollouts.episodes import Episode
 
 #: ``results.json``'s key of the table.
@@ -73,8 +74,9 @@ class Condition:
         return kwargs
 
     def vectorizable(self, backend: str) -> bool:
-        """Whether the vector env has it (MuJoCo's batch has no plugged holes)."""
-        return not (backend == "mujoco" and self.defects and self.defects[0] == "blocked")
+        """Whether the vector env of ``backend`` takes its defects (MuJoCo's batch has no
+        plugged holes)."""
+        return not self.defects or self.defects[0] in simulator(backend).batch.defect_kinds
 
 
 def _grade_env(um: int) -> str:

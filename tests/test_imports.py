@@ -322,25 +322,25 @@ def test_no_import_runs_up_a_layer() -> None:
     assert not upward, "imports from a lower layer to a higher one:\n" + "\n".join(upward)
 
 
+def _across_the_edge(allowed: dict[str, frozenset[str]], *, of_importer: bool) -> list[str]:
+    """The imports between an edge part (a key of ``allowed``: the importer with
+    ``of_importer``, else the imported part) and another part not in its entry."""
+    outside = []
+    for found in _ruled():
+        importer, target = part(found.importer), part(found.target)
+        edge, other = (importer, target) if of_importer else (target, importer)
+        if edge in allowed and other != edge and other not in allowed[edge]:
+            outside.append(str(found))
+    return outside
+
+
 def test_the_edge_imports_only_what_it_may() -> None:
-    outside = [
-        str(found)
-        for found in _ruled()
-        if part(found.importer) in EDGE_IMPORTS
-        and part(found.target) != part(found.importer)
-        and part(found.target) not in EDGE_IMPORTS[part(found.importer)]
-    ]
+    outside = _across_the_edge(EDGE_IMPORTS, of_importer=True)
     assert not outside, "imports the edge may not make:\n" + "\n".join(outside)
 
 
 def test_only_the_listed_parts_import_the_edge() -> None:
-    wrong = [
-        str(found)
-        for found in _ruled()
-        if part(found.target) in EDGE_IMPORTERS
-        and part(found.importer) != part(found.target)
-        and part(found.importer) not in EDGE_IMPORTERS[part(found.target)]
-    ]
+    wrong = _across_the_edge(EDGE_IMPORTERS, of_importer=False)
     assert not wrong, "imports of the edge from parts it does not serve:\n" + "\n".join(wrong)
 
 

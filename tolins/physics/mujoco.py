@@ -181,8 +181,9 @@ class MujocoBatch(Capabilities):
         self.socket = socket
         self.model = compile_model(socket)
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
-        # Caller models throughout (the batch reads them live): a bent-pin draw replaces its
-        # simulation's, and the sensors are switched off on each for the steps before a read.
+        # The batch and the arrays bound to it. The models a simulation runs on are read
+        # live; ``_models`` holds what the next call applies (a bent-pin draw replaces its
+        # simulation's).
         self._servo = BatchServo(self.model, self.num_envs, self.num_threads, persistent)
         self.batch = self._servo.batch
         self._models = list(self._servo.models)
@@ -190,11 +191,7 @@ class MujocoBatch(Capabilities):
         # The workpieces' models: the nominal one and the last 2 num_envs others.
         self._compiled = SocketCache(compile_model, socket, 2 * self.num_envs, own=self.model)
         self._models_changed = False
-        servo = self._servo
-        self._qpos, self._qvel = servo.qpos, servo.qvel
-        self._act, self._sensordata = servo.act, servo.sensordata
-        self._ctrl = servo.ctrl
-        self.layout = servo.layout
+        self.layout = self._servo.layout
         self._drawing: mujoco.MjData | None = None
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
@@ -225,16 +222,17 @@ class MujocoBatch(Capabilities):
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
         self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
-        self._qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
-        self._act[ids] = self._qpos[ids]
+        servo = self._servo
+        servo.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
+        servo.act[ids] = servo.qpos[ids]
         self.batch.forward(ids)
-        force = sequential_sum(self._sensordata[ids, self.layout.touch]) * FORCE_SCALE
+        force = sequential_sum(servo.sensordata[ids, self.layout.touch]) * FORCE_SCALE
         return self._state(ids, force, None)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
-        self._ctrl[ids] = np.asarray(velocities, dtype=float)[:, self.layout.joint_pose]
+        self._servo.ctrl[ids] = np.asarray(velocities, dtype=float)[:, self.layout.joint_pose]
         peak, errors = self._servo.step(ids, self.substeps, self.checks)
         return self._state(ids, peak * FORCE_SCALE, errors)
 
@@ -242,7 +240,7 @@ class MujocoBatch(Capabilities):
         self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
     ) -> BatchState:
         layout = self.layout
-        qpos, sensordata = self._qpos[ids], self._sensordata[ids]
+        qpos, sensordata = self._servo.qpos[ids], self._servo.sensordata[ids]
         theta = layout.pose_joint[2]
         wrench = np.array(
             [
@@ -255,7 +253,8 @@ class MujocoBatch(Capabilities):
     def pin_forces(self, ids: np.ndarray) -> np.ndarray:
         """Summed normal contact force on each pin (N) of simulations ``ids``, ``(n, pins)``,
         as ``ServoStepper.pin_forces`` after the last step."""
-        return self._sensordata[np.asarray(ids, dtype=np.intp), self.layout.touch] * FORCE_SCALE
+        touch = self._servo.sensordata[np.asarray(ids, dtype=np.intp), self.layout.touch]
+        return touch * FORCE_SCALE
 
     def pin_touch_points(self, index: int) -> np.ndarray:
         """Where each pin of simulation ``index`` presses on the board after its last step,
@@ -287,6 +286,5 @@ class MujocoBatch(Capabilities):
         """Release the simulations: the batch (its threads end with it), the arrays bound to
         it and the compiled models. The batch is not used afterwards."""
         self.batch = self._servo = None
-        self._qpos = self._qvel = self._act = self._ctrl = self._sensordata = None
         self._models, self._drawing = [], None
         self._compiled.clear()

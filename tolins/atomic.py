@@ -2,17 +2,20 @@
 
 A writer that is killed leaves its hidden temporary behind. Writers that put their process
 id into the temporary's name let the next writer there remove the leftovers of processes
-that no longer run (:func:`remove_dead_temporaries`), and never a live writer's.
+that no longer run (:func:`remove_dead_temporaries`), and never a live writer's. Two
+writers of one place exclude each other with :func:`exclusive_lock`.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import os
 import re
 import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -76,3 +79,63 @@ def remove_dead_temporaries(folder: str | os.PathLike, pattern: re.Pattern[str])
             candidate.unlink(missing_ok=True)
         removed.append(candidate)
     return removed
+
+
+@contextlib.contextmanager
+def exclusive_lock(
+    path: str | os.PathLike,
+    holder: str,
+    busy: Callable[[str], Exception],
+    *,
+    remove: bool = False,
+    holder_bytes: int = 200,
+) -> Iterator[Path]:
+    """Hold an exclusive ``fcntl.flock`` on the file ``path`` (creating it and its folder)
+    for the block, with the line ``holder`` (who holds it) written in it; the path.
+
+    When another descriptor holds it, raises ``busy(text)`` at once, ``text`` being what its
+    holder wrote (the first ``holder_bytes`` bytes) or "another process". The kernel drops
+    the lock when its process ends, however it ends, so a stale file never blocks a later
+    run. With ``remove`` the file is removed on release; a process that opened it before
+    and locks it after finds it gone from ``path`` and opens the one there now, so no two
+    processes ever hold the lock of ``path`` at once."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = _locked_descriptor(path, busy, reopen=remove, holder_bytes=holder_bytes)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{holder}\n".encode(), 0)
+        yield path
+    finally:
+        if remove:
+            path.unlink(missing_ok=True)  # still locked: whoever locks it next reopens
+        os.close(fd)  # releases the lock
+
+
+def _locked_descriptor(
+    path: Path, busy: Callable[[str], Exception], *, reopen: bool, holder_bytes: int
+) -> int:
+    """A descriptor of ``path`` locked exclusively (:func:`exclusive_lock`); with ``reopen``,
+    of the file at ``path`` now, not one that its holder removed since it was opened."""
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            text = os.pread(fd, holder_bytes, 0).decode(errors="replace").strip()
+            os.close(fd)
+            raise busy(text or "another process") from None
+        except BaseException:
+            os.close(fd)
+            raise
+        if not reopen or _same_file(fd, path):
+            return fd
+        os.close(fd)
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether the open file ``fd`` is the file at ``path`` now."""
+    try:
+        return os.path.samestat(os.fstat(fd), os.stat(path))
+    except FileNotFoundError:
+        return False

@@ -4,7 +4,6 @@ from :class:`~tolins.bench.pipeline.config.BenchConfig`."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from tolins.bench.pipeline.config import SEEDS_MAX, BenchConfig
@@ -57,8 +56,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         bench = run_bench(config)
     except (ValueError, FileNotFoundError) as error:
-        print(f"tolins bench: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins bench", error)
     print(format_results_table(bench.results))
     print("\nThe paper's claims in this run:")
     print(format_claims(bench.claims))

@@ -21,6 +21,11 @@ from typing import NoReturn
 from tolins.geometry.validation import SEED_MAX
 
 PORT_MAX = 65535
+#: The help of ``--trust-pickle`` (``tolins evaluate``, ``tolins record``): what it lets run.
+TRUST_PICKLE_HELP = (
+    "load an SB3 PATH.zip with SB3's own load, which unpickles and so runs code "
+    "stored in the zip (default: rebuilt from its JSON and weights, without pickle)"
+)
 
 
 class OptionError(ValueError):

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 from tolins.cli import checks
 
@@ -39,8 +38,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = compare(args.a, args.b)
     except ValueError as error:
-        print(f"tolins compare: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins compare", error)
     print(format_comparison(result))
     if args.json:
         from tolins.atomic import atomic_json

@@ -4,7 +4,6 @@ generated from :class:`~tolins.learning.embedding.config.EmbeddingTrainConfig`."
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 
 from tolins.cli import checks
@@ -32,8 +31,7 @@ def run_train(args: argparse.Namespace) -> int:
     try:
         config = config_from_args(EmbeddingTrainConfig, args)
     except ValueError as error:
-        print(f"tolins embed train: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins embed train", error)
     suffix = "" if config.model == "paper" else f"_{config.model}"
     out = checks.output_file("--out", args.out or f"runs/embedding_{config.family}{suffix}.pt")
     from tqdm import tqdm
@@ -53,8 +51,7 @@ def run_train(args: argparse.Namespace) -> int:
             result = train_embedding(config, on_epoch=advance)
         except ValueError as error:  # diverged: no checkpoint of NaN weights
             bar.close()
-            print(f"tolins embed train: {error}", file=sys.stderr)
-            return 2
+            return checks.fail("tolins embed train", error)
     path = save_checkpoint(out, result.model)
     quality = measure(
         result.model, held_out_specs(config.family, args.held_out, model=config.model)

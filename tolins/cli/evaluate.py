@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from tolins.cli import checks
@@ -29,8 +28,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     evaluate.add_argument(
         "--trust-pickle",
         action="store_true",
-        help="load an SB3 PATH.zip with SB3's own load, which unpickles and so runs code "
-        "stored in the zip (default: rebuilt from its JSON and weights, without pickle)",
+        help=checks.TRUST_PICKLE_HELP,
     )
     evaluate.add_argument("--env", required=True, help="eval env id, e.g. tolins/Circle2x2-v1")
     evaluate.add_argument(
@@ -70,8 +68,7 @@ def run(args: argparse.Namespace) -> int:
             profile_plot=profile,
         )
     except (ValueError, FileNotFoundError) as error:
-        print(f"tolins evaluate: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins evaluate", error)
     print(format_rows({name: entry}))
     if rows:
         print(f"\nreference rows on {args.env}, from {source}:")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -75,8 +74,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         data = export_bytes(_spec(args), out.suffix, args.part)
     except (ValueError, OSError) as error:  # UnicodeDecodeError is a ValueError
-        print(f"tolins export: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins export", error)
     atomic.atomic_write(out, lambda file: file.write(data))
     print(f"wrote {out} ({len(data) / 1e3:.0f} kB)")
     return 0

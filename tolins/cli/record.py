@@ -33,8 +33,7 @@ def _add_record(commands: argparse._SubParsersAction) -> None:
     record.add_argument(
         "--trust-pickle",
         action="store_true",
-        help="load an SB3 PATH.zip with SB3's own load, which unpickles and so runs code "
-        "stored in the zip (default: rebuilt from its JSON and weights, without pickle)",
+        help=checks.TRUST_PICKLE_HELP,
     )
     record.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
     record.add_argument("--episodes", type=checks.positive_int, default=5, help="episodes")
@@ -96,8 +95,7 @@ def run_record(args: argparse.Namespace) -> int:
                 on_episode=lambda _: bar.update(),
             )
     except ValueError as error:
-        print(f"tolins record: {error}", file=sys.stderr)
-        return 2
+        return checks.fail("tolins record", error)
     finally:
         env.close()
     successes = sum(e.success for e in episodes)
@@ -119,14 +117,14 @@ def _check_replay(args: argparse.Namespace) -> None:
         raise checks.OptionError(
             f"{picked} picks what a screenshot shows; allowed: with --screenshot"
         )
-    if (args.step or 0) < 0 or (args.time or 0.0) < 0:
+    if (args.step or 0) < 0:  # --time is never negative (checks.non_negative_float)
         raise checks.OptionError(f"{picked} is negative; allowed: a step ≥ 0 or a time ≥ 0 s")
 
 
 def run_replay(args: argparse.Namespace) -> int:
     """Show the recording (or take its screenshot); 2 for a bad file, 1 if the viewer fails."""
     _check_replay(args)
-    from tolins.record import RrdError, replay
+    from tolins.record import replay
 
     try:
         return replay(
@@ -138,9 +136,8 @@ def run_replay(args: argparse.Namespace) -> int:
             step=args.step,
             time=args.time,
         )
-    except (RrdError, ValueError) as error:  # the file, or a step/time outside it
-        print(f"tolins replay: {error}", file=sys.stderr)
-        return 2
+    except ValueError as error:  # the file (an RrdError), or a step/time outside it
+        return checks.fail("tolins replay", error)
     except RuntimeError as error:  # the viewer failed
         print(f"tolins replay: {error}", file=sys.stderr)
         return 1

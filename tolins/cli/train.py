@@ -4,7 +4,6 @@ configs (:mod:`tolins.learning.imitation.config`)."""
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import TYPE_CHECKING
 
 from tolins.cli import checks
@@ -145,8 +144,7 @@ def run(args: argparse.Namespace) -> int:
                 resume=args.resume,
             )
     except (ValueError, FileNotFoundError) as error:
-        print(f"{prog}: {error}", file=sys.stderr)
-        return 2
+        return checks.fail(prog, error)
     final = result.final
     print(
         f"wrote {args.out}: {len(result.history)} iterations ({result.stopped}); final policy: "

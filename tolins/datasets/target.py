@@ -11,7 +11,6 @@ removes the ones of processes that no longer run.
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import os
 import re
 import tempfile
@@ -67,44 +66,19 @@ def claim_target(root: str | os.PathLike, name: str) -> Iterator[Path]:
     if _HELD.get(lock) == threading.get_ident():
         yield target
         return
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd = _lock(lock, target)
-    _HELD[lock] = threading.get_ident()
-    try:
-        yield check_target(root, name)  # the writer before may have finished meanwhile
-    finally:
-        del _HELD[lock]
-        lock.unlink(missing_ok=True)
-        os.close(fd)  # releases the lock
 
+    def busy(holder: str) -> ValueError:
+        return ValueError(
+            f"{target} is being written by {holder}; allowed: wait for it to finish, "
+            "or a new --name or --out"
+        )
 
-def _lock(lock: Path, target: Path) -> int:
-    """A descriptor of the file ``lock``, locked exclusively; ``ValueError`` naming the
-    holder when another descriptor holds it."""
-    while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    with atomic.exclusive_lock(lock, f"process {os.getpid()}", busy, remove=True, holder_bytes=100):
+        _HELD[lock] = threading.get_ident()
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 100, 0).decode(errors="replace").strip() or "another process"
-            os.close(fd)
-            raise ValueError(
-                f"{target} is being written by {holder}; allowed: wait for it to finish, "
-                "or a new --name or --out"
-            ) from None
-        if _same_file(fd, lock):  # not a file its holder removed as it finished
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"process {os.getpid()}\n".encode(), 0)
-            return fd
-        os.close(fd)
-
-
-def _same_file(fd: int, path: Path) -> bool:
-    """Whether the open file ``fd`` is the file at ``path`` now."""
-    try:
-        return os.path.samestat(os.fstat(fd), os.stat(path))
-    except FileNotFoundError:
-        return False
+            yield check_target(root, name)  # the writer before may have finished meanwhile
+        finally:
+            del _HELD[lock]
 
 
 def temporary_folder(target: Path) -> Path:

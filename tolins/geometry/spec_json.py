@@ -26,15 +26,17 @@ SPEC_TYPES: dict[str, type[CircularSocket] | type[PolygonSocket]] = {
 _DERIVED = frozenset({"defective"})
 
 
-def spec_from_mapping(data: Mapping[str, object]) -> SocketSpec:
-    """The spec whose fields ``data`` holds (``type`` optional, see the module).
+def spec_from_mapping(data: Mapping[str, object], *, derived: bool = True) -> SocketSpec:
+    """The spec whose fields ``data`` holds (``type`` optional, see the module); with
+    ``derived=False`` a derived key (``defective``) is an unknown field, not ignored.
 
     Raises ``ValueError`` (one line) for a wrong type, an unknown or missing field, or a
     value the spec refuses.
     """
     if not isinstance(data, Mapping):
         raise ValueError(f"socket {data!r} is not an object; allowed: a JSON object of fields")
-    fields = {key: value for key, value in data.items() if key not in _DERIVED}
+    ignored = _DERIVED if derived else frozenset()
+    fields = {key: value for key, value in data.items() if key not in ignored}
     kind = fields.pop("type", None)
     if kind is None:
         kind = "PolygonSocket" if "sides" in fields else "CircularSocket"

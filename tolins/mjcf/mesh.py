@@ -32,7 +32,11 @@ from shapely.geometry import Polygon
 from tolins.geometry.specs import CircularSocket, SocketSpec, polygon_vertices
 from tolins.geometry.workspace import PIN_LENGTH
 from tolins.mjcf.model import (
+    BOARD_RGBA,
     BOARD_THICKNESS,
+    CARRIER_RGBA,
+    CARRIER_THICKNESS,
+    PIN_RGBA,
     board_margin,
     carrier_half_size,
     cell_half_width,
@@ -43,16 +47,11 @@ from tolins.mjcf.model import (
 PIN_SECTIONS = 64
 #: Height (mm) of the pin tips over the board's top when board and workpiece share a file.
 WORKPIECE_LIFT = 2.0
-#: Thickness (mm) of the carrier plate over the pins (the model's: a box of half-height 1).
-CARRIER_THICKNESS = 2.0
-#: Colours (RGBA, 0–1): the model's board, pins and carrier; a burred, a short pin and a
-#: plug as the recordings draw them.
-BOARD_RGBA = (0.25, 0.45, 0.3, 1.0)
-PIN_RGBA = (0.85, 0.7, 0.3, 1.0)
+#: Colours (RGBA, 0–1) beside the model's board, pin and carrier ones: a burred, a short
+#: pin and a plug as the recordings draw them.
 BURR_RGBA = (0.86, 0.24, 0.2, 1.0)
 SHORT_RGBA = (0.27, 0.51, 0.86, 1.0)
 PLUG_RGBA = (0.78, 0.24, 0.63, 1.0)
-CARRIER_RGBA = (0.6, 0.6, 0.65, 0.5)
 #: What :func:`socket_parts` can build.
 PART_CHOICES = ("all", "board", "workpiece")
 

@@ -85,6 +85,12 @@ HINGE_KP = 2.0e8
 SOLREF = "0.002 1"
 SOLIMP = "0.99 0.999 0.01"
 FRICTION = 0.3
+#: Thickness (mm) of the carrier plate over the pins: a box on the pins' tops.
+CARRIER_THICKNESS = 2.0
+#: Colours (RGBA, 0–1) of the board, the pins and the half-transparent carrier.
+BOARD_RGBA = (0.25, 0.45, 0.3, 1.0)
+PIN_RGBA = (0.85, 0.7, 0.3, 1.0)
+CARRIER_RGBA = (0.6, 0.6, 0.65, 0.5)
 
 
 def physics_timestep(spec: SocketSpec) -> float:
@@ -351,6 +357,7 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
     )
     extent = scene_extent(spec)
     carrier = carrier_half_size(spec)
+    carrier_z = PIN_LENGTH + CARRIER_THICKNESS / 2  # the carrier's centre, over the pins
     slide_mass = SLIDE_ARMATURE + 0.1
     lines = [
         f'<mujoco model="tolins_{spec.family}">',
@@ -367,10 +374,10 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
         'condim="3" margin="0" gap="0"/>',
         *pair_default,
         '<default class="board">',
-        '<geom contype="1" conaffinity="2" rgba="0.25 0.45 0.3 1"/>',
+        f'<geom contype="1" conaffinity="2" rgba="{nums(BOARD_RGBA)}"/>',
         "</default>",
         '<default class="pin">',
-        f'<geom {pin_bits} rgba="0.85 0.7 0.3 1"/>',
+        f'<geom {pin_bits} rgba="{nums(PIN_RGBA)}"/>',
         "</default>",
         "</default>",
         "<asset>",
@@ -387,10 +394,10 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
         _joint("y", "slide", "0 1 0", SLIDE_ARMATURE),
         _joint("z", "slide", "0 0 1", SLIDE_ARMATURE),
         _joint("theta", "hinge", "0 0 1", HINGE_ARMATURE),
-        f'<inertial pos="0 0 {num(PIN_LENGTH + 1)}" mass="0.1" diaginertia="10 10 10"/>',
-        f'<geom name="carrier" type="box" pos="0 0 {num(PIN_LENGTH + 1)}" '
-        f'size="{nums((*carrier, 1))}" contype="2" conaffinity="1" '
-        'rgba="0.6 0.6 0.65 0.5"/>',
+        f'<inertial pos="0 0 {num(carrier_z)}" mass="0.1" diaginertia="10 10 10"/>',
+        f'<geom name="carrier" type="box" pos="0 0 {num(carrier_z)}" '
+        f'size="{nums((*carrier, CARRIER_THICKNESS / 2))}" contype="2" conaffinity="1" '
+        f'rgba="{nums(CARRIER_RGBA)}"/>',
         '<body name="pins">',
         '<inertial pos="0 0 0" mass="0.001" diaginertia="0.001 0.001 0.001"/>',
         '<site name="ft_site" pos="0 0 0" size="0.1"/>',

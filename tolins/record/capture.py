@@ -27,6 +27,9 @@ from pathlib import Path
 
 from rerun.experimental import ViewerClient, ViewerState
 
+from tolins.record.layout import STEP
+
+#: The only interface a viewer listens on: nothing outside this machine reaches it.
 LOOPBACK = "127.0.0.1"
 #: The viewer's log level: what is less severe would be drawn as toasts over the screenshot.
 VIEWER_LOG_LEVEL = "error"
@@ -51,11 +54,17 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
+def base_args(path: Path) -> list[str]:
+    """Arguments of ``rerun`` that every viewer of ``path`` starts with: bound to
+    :data:`LOOPBACK`, without the welcome screen."""
+    return [str(path), "--bind", LOOPBACK, "--hide-welcome-screen"]
+
+
 def headless_args(path: Path, port: int, window_size: str) -> list[str]:
     """Arguments of ``rerun`` that serve ``path`` in a headless viewer on ``port``."""
     return [
-        str(path),
-        *("--bind", LOOPBACK, "--hide-welcome-screen", "--headless"),
+        *base_args(path),
+        "--headless",
         *("--window-size", window_size, "--port", str(port)),
     ]
 
@@ -70,7 +79,7 @@ def settled(shots: Sequence[bytes], count: int = SETTLED_SHOTS) -> bool:
     return len(shots) >= count and len(set(shots[-count:])) == 1
 
 
-def at_step(state: ViewerState, step: int | None, timeline: str = "step") -> bool:
+def at_step(state: ViewerState, step: int | None, timeline: str = STEP) -> bool:
     """Whether the viewer's ``state`` (:meth:`ViewerClient.get_state`) has loaded
     everything and shows a recording whose time cursor on ``timeline`` stands at
     ``step`` (``None``: any time)."""

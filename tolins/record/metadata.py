@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from typing import Any
 
-from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.geometry.spec_json import SPEC_TYPES, spec_from_mapping
+from tolins.geometry.specs import SocketSpec
 
-_TYPES = {cls.__name__: cls for cls in (CircularSocket, PolygonSocket)}
+#: The spec classes a recording's metadata names, by ``type``.
+_TYPES = SPEC_TYPES
 
 
 def spec_to_dict(spec: SocketSpec) -> dict[str, Any]:
@@ -21,9 +24,10 @@ def spec_to_dict(spec: SocketSpec) -> dict[str, Any]:
 
 
 def spec_from_dict(data: dict[str, Any]) -> SocketSpec:
-    """The spec that :func:`spec_to_dict` wrote."""
-    fields = dict(data)
-    kind = fields.pop("type", None)
-    if kind not in _TYPES:
+    """The spec that :func:`spec_to_dict` wrote: its ``type`` is required and nothing but
+    the fields of that type is allowed (:func:`~tolins.geometry.spec_json.spec_from_mapping`
+    with ``derived=False``); ``ValueError`` otherwise."""
+    kind = data.get("type") if isinstance(data, Mapping) else None
+    if kind not in _TYPES:  # spec_from_mapping would guess a missing type from the fields
         raise ValueError(f"spec type={kind!r}; allowed: {sorted(_TYPES)}")
-    return _TYPES[kind](**fields)
+    return spec_from_mapping(data, derived=False)

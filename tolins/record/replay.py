@@ -17,12 +17,11 @@ from urllib.parse import quote
 import numpy as np
 from rerun.chunk import RrdReader
 
-from tolins.record.capture import CaptureError, capture
+from tolins.record.capture import LOOPBACK, CaptureError, base_args, capture
 from tolins.record.layout import STEP
 from tolins.record.snapshot import cut_recording
 from tolins.record.stale import remove_dead_temporaries
 
-LOOPBACK = "127.0.0.1"
 #: Screenshot size in logical points.
 WINDOW_SIZE = "1280x800"
 SCREENSHOT_TIMEOUT_S = 180.0
@@ -84,7 +83,7 @@ def viewer_args(
 ) -> list[str]:
     """Arguments of ``rerun`` that show ``path`` in the native or (``web``) the web viewer;
     a screenshot's are :func:`tolins.record.capture.headless_args`."""
-    args = [str(path), "--bind", LOOPBACK, "--hide-welcome-screen"]
+    args = base_args(path)
     if web:
         return [*args, "--web-viewer", "--web-viewer-port", str(web_port), "--port", str(grpc_port)]
     return [*args, "--port", "auto"]

@@ -19,7 +19,7 @@ from tolins.envs.task_settings import (
 )
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
-from tolins.physics import BACKENDS, Backend, make_backend, simulator
+from tolins.physics import BACKENDS, Backend, simulator
 
 __all__ = ["BACKENDS", "ENV_KEYWORDS", "InsertionEnv"]
 #: Every keyword ``InsertionEnv`` takes.
@@ -183,7 +183,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         **unknown: Any,
     ) -> None:
         check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
-        simulator(backend, single=True)
+        chosen = simulator(backend, single=True)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
         self.settings = TaskSettings(
@@ -201,11 +201,10 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             defects=defects,
         )
         self.backend_name = backend
-        self.control_dt = self.settings.control_dt
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
-        self.backend: Backend | None = make_backend(backend, socket, self.control_dt)
+        self.backend: Backend | None = chosen.single(socket, self.control_dt)
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
         self._closed = False

@@ -167,6 +167,7 @@ class SettingsAttributes:
     reward_mode = setting("reward_mode")
     randomization = setting("randomization")
     defects = setting("defects")
+    control_dt = setting("control_dt")
 
 
 #: The keywords of :class:`TaskSettings` an env takes besides its socket.

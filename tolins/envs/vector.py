@@ -14,7 +14,6 @@ in :mod:`tolins.envs.vector_views`).
 
 from __future__ import annotations
 
-from numbers import Integral
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -30,10 +29,10 @@ from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_r
 from tolins.envs.task_settings import TASK_KEYWORDS, TaskSettings, check_keywords
 from tolins.envs.vector_views import EnvView, check_name, check_value
 from tolins.geometry.specs import SocketSpec
-from tolins.geometry.validation import check_int
+from tolins.geometry.validation import check_int, is_seed
 from tolins.paper import A_MAX
-from tolins.physics import SIMULATORS, BatchPhysics, make_batch, simulator
-from tolins.physics.registry import with_capability
+from tolins.physics import BatchPhysics, make_batch, simulator
+from tolins.physics.registry import taking_defect, with_capability
 
 _AUTORESET = {mode.value: mode for mode in AutoresetMode}
 #: Every keyword ``InsertionVectorEnv`` takes.
@@ -90,23 +89,18 @@ def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
     return out
 
 
-def _is_int(value: object) -> bool:
-    """Whether ``value`` is an integer (Python's or numpy's), not a bool."""
-    return isinstance(value, Integral) and not isinstance(value, (bool, np.bool_))
-
-
 def _per_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
     """Gymnasium's rule: an int seeds env ``i`` with ``seed + i``; a list gives each its own.
     Seeds are integers ≥ 0 (numpy's as well, returned as Python ints)."""
     allowed = f"None, an int ≥ 0, or a list of {n} ints ≥ 0 or None"
     if seed is None:
         return [None] * n
-    if _is_int(seed) and seed >= 0:
+    if is_seed(seed):
         return [int(seed) + i for i in range(n)]
     if not isinstance(seed, (list, tuple)) or len(seed) != n:
         raise ValueError(f"seed={seed!r}; allowed: {allowed}")
     for i, value in enumerate(seed):
-        if value is not None and not (_is_int(value) and value >= 0):
+        if value is not None and not is_seed(value):
             raise ValueError(f"seed[{i}]={value!r} is not a seed; allowed: {allowed}")
     return [None if value is None else int(value) for value in seed]
 
@@ -231,6 +225,8 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.env_rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.env_seeds: list[int | None] = [None] * self.num_envs
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        #: Whether any env has had a state (set in ``_begin``): ``step`` needs a reset first.
+        self._started = False
         self._views = [EnvView(self, i) for i in range(self.num_envs)]
         # Renderers by identity of the model they draw, the least recently drawn first.
         self._renderers: dict[int, tuple[mujoco.MjModel, mujoco.Renderer]] = {}
@@ -283,7 +279,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         self._check_open()
-        if all(episode.state is None for episode in self.episodes):
+        if not self._started:
             raise gym.error.ResetNeeded("step() called before reset()")
         check_actions_shape(actions, self.num_envs, "one [ux, uy, utheta, uz] per env")
         mode = self.metadata["autoreset_mode"]
@@ -336,7 +332,9 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
-            observations[i], info = self.episodes[i].begin(plan, state.row(k), self.env_rngs[i])
+            row = state.row(k)
+            self._started = True  # begin sets the episode's state before anything can fail
+            observations[i], info = self.episodes[i].begin(plan, row, self.env_rngs[i])
             infos.append(info)
         return observations, infos
 
@@ -421,10 +419,10 @@ def _check_capabilities(settings: TaskSettings, backend: str) -> None:
         raise ValueError(f"randomization is not supported on backend={backend!r}")
     kind = None if settings.defects is None else settings.defects[0]
     if kind is not None and kind not in batch.defect_kinds:
-        taking = [name for name, s in SIMULATORS.items() if kind in s.batch.defect_kinds]
+        supported = taking_defect(kind)
         raise ValueError(
             f"defects={settings.defects!r} is not supported on backend={backend!r}; allowed: "
-            f"the single env, or backend {', '.join(map(repr, taking))}"
+            f"the single env, or backend {', '.join(map(repr, supported))}"
         )
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from tolins.envs.insertion_env import InsertionEnv
-from tolins.envs.task_settings import SettingsAttributes, TaskSettings, setting
+from tolins.envs.task_settings import SettingsAttributes, TaskSettings
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.workspace import check_goal
 
@@ -49,9 +49,6 @@ class EnvView(SettingsAttributes):
     def __init__(self, vector: InsertionVectorEnv, index: int) -> None:
         self._vector = vector
         self._index = index
-
-    # the single env's is a plain attribute, set from its settings
-    control_dt = setting("control_dt")
 
     @property
     def settings(self) -> TaskSettings:

@@ -21,12 +21,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from numbers import Integral
 
 import numpy as np
 
 from tolins.geometry.specs import MAX_BURR, MAX_PITCH_ERROR, MAX_SHORTENING, CircularSocket
-from tolins.geometry.validation import check_positive
+from tolins.geometry.validation import check_positive, is_seed
 
 #: A bent-pin std is allowed when at least this share of its draws keep every pin in its
 #: cell (:attr:`~tolins.geometry.specs.CircularSocket.offset_limit`).
@@ -85,16 +84,11 @@ def check_rng(rng: object, field: str = "rng") -> np.random.Generator:
         return rng
     if isinstance(rng, (np.random.SeedSequence, np.random.BitGenerator)) or rng is None:
         return np.random.default_rng(rng)
-    if isinstance(rng, (list, tuple)) and rng and all(_is_seed(seed) for seed in rng):
+    if isinstance(rng, (list, tuple)) and rng and all(is_seed(seed) for seed in rng):
         return np.random.default_rng([int(seed) for seed in rng])
-    if _is_seed(rng):
+    if is_seed(rng):
         return np.random.default_rng(int(rng))
     raise ValueError(f"{field}={rng!r} is not a random generator or seed; allowed: {allowed}")
-
-
-def _is_seed(value: object) -> bool:
-    """Whether ``value`` is an integer ≥ 0 (Python's or numpy's), not a bool."""
-    return isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)) and value >= 0
 
 
 def _check_sigma_given(sigma: object, kind: str) -> None:

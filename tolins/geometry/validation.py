@@ -26,6 +26,11 @@ def check_int(field: str, value: object, *, minimum: int, maximum: int | None = 
 SEED_MAX = 2**32 - 1
 
 
+def is_seed(value: object) -> bool:
+    """Whether ``value`` is an integer ≥ 0 (Python's or numpy's), not a bool."""
+    return isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)) and value >= 0
+
+
 def check_seed(field: str, value: object) -> int:
     """Return ``value`` as an int if it is a seed: an integer 0 … :data:`SEED_MAX`."""
     return check_int(field, value, minimum=0, maximum=SEED_MAX)

@@ -56,7 +56,7 @@ from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import contains, pin_levels, pins_inside_pose
 from tolins.geometry.validation import check_int
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
-from tolins.mjcf.model import POSE_JOINTS
+from tolins.mjcf import model_layout
 from tolins.physics.compiled import SocketCache, compile_model
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.schedule import check_control_dt
@@ -187,17 +187,21 @@ def _wall_wrench(velocities: np.ndarray) -> np.ndarray:
     return wrench
 
 
-def _drawing(socket: SocketSpec) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """The MuJoCo model of ``socket`` and a data of it, to draw its workpiece's poses."""
+def _drawing(socket: SocketSpec) -> tuple[mujoco.MjModel, mujoco.MjData, np.ndarray]:
+    """The MuJoCo model of ``socket``, a data of it, to draw its workpiece's poses, and the
+    model's ``joint_pose`` (:func:`tolins.mjcf.model_layout`: each ``qpos`` entry's pose
+    component; the model's ``qpos`` is the workpiece's four joints)."""
     model = compile_model(socket)
-    return model, mujoco.MjData(model)
+    return model, mujoco.MjData(model), model_layout(model).joint_pose
 
 
-def posed_data(model: mujoco.MjModel, data: mujoco.MjData, pose: np.ndarray) -> mujoco.MjData:
-    """``data`` of ``model`` (made by :func:`tolins.make_mjcf`) with the workpiece's joints at
-    ``pose`` ``[x, y, theta, z]`` and forward kinematics run: the drawing of a kinematic pose."""
-    for value, joint in zip(pose, POSE_JOINTS, strict=True):
-        data.qpos[model.joint(joint).qposadr[0]] = value
+def posed_data(
+    model: mujoco.MjModel, data: mujoco.MjData, joint_pose: np.ndarray, pose: np.ndarray
+) -> mujoco.MjData:
+    """``data`` of ``model`` (made by :func:`tolins.make_mjcf`, ``joint_pose`` its layout's)
+    with the workpiece's joints at ``pose`` ``[x, y, theta, z]`` and forward kinematics run:
+    the drawing of a kinematic pose."""
+    data.qpos[:] = pose[joint_pose]
     mujoco.mj_forward(model, data)
     return data
 
@@ -273,8 +277,8 @@ class KinematicBatch(Capabilities):
         """Workpiece ``index``'s MuJoCo model and a data posed at its pose (forward
         kinematics only), as the single env's ``KinematicBackend.data`` draws it. The data
         is shared by the workpieces of one socket: draw it before asking for the next."""
-        model, data = self._drawings.get(self._sockets[index])
-        return model, posed_data(model, data, self._pose[index].copy())
+        model, data, joint_pose = self._drawings.get(self._sockets[index])
+        return model, posed_data(model, data, joint_pose, self._pose[index].copy())
 
     def close(self) -> None:
         """Release the drawing models (the poses are plain arrays)."""

@@ -35,13 +35,7 @@ from tolins.physics.compiled import SocketCache, compile_model
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import control_plan
-from tolins.physics.servo import (
-    BatchServo,
-    ServoStepper,
-    board_wrench,
-    pin_touch_points,
-    sequential_sum,
-)
+from tolins.physics.servo import BatchServo, ServoStepper, pin_touch_points
 
 
 class MujocoBackend(Capabilities):
@@ -221,34 +215,14 @@ class MujocoBatch(Capabilities):
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
-        self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
-        servo = self._servo
-        servo.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
-        servo.act[ids] = servo.qpos[ids]
-        self.batch.forward(ids)
-        force = sequential_sum(servo.sensordata[ids, self.layout.touch]) * FORCE_SCALE
-        return self._state(ids, force, None)
+        return self._servo.reset(ids, poses)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
         self._servo.ctrl[ids] = np.asarray(velocities, dtype=float)[:, self.layout.joint_pose]
         peak, errors = self._servo.step(ids, self.substeps, self.checks)
-        return self._state(ids, peak * FORCE_SCALE, errors)
-
-    def _state(
-        self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
-    ) -> BatchState:
-        layout = self.layout
-        qpos, sensordata = self._servo.qpos[ids], self._servo.sensordata[ids]
-        theta = layout.pose_joint[2]
-        wrench = np.array(
-            [
-                board_wrench(q[theta], s[layout.force].tolist(), s[layout.torque_z])
-                for q, s in zip(qpos, sensordata, strict=True)
-            ]
-        ).reshape(len(ids), 4)
-        return BatchState(qpos[:, layout.pose_joint], wrench, peak_force, errors)
+        return self._servo.state(ids, peak * FORCE_SCALE, errors)
 
     def pin_forces(self, ids: np.ndarray) -> np.ndarray:
         """Summed normal contact force on each pin (N) of simulations ``ids``, ``(n, pins)``,
@@ -263,14 +237,6 @@ class MujocoBatch(Capabilities):
             raise RuntimeError("pin_touch_points needs MujocoBatch(..., persistent=True)")
         data = self.batch.get_data(index)
         return pin_touch_points(self._models[index], data, self.layout.pin_by_geom)
-
-    def simulation(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        """Simulation ``index``'s model and a data at its state (forward kinematics run),
-        for rendering or inspection."""
-        model = self._models[index]
-        data = self.batch.get_data(index)
-        mujoco.mj_forward(model, data)
-        return model, data
 
     def drawing(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
         """Simulation ``index``'s model and its whole data as its last call left it (a

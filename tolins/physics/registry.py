@@ -70,6 +70,11 @@ def taking(option: str) -> tuple[str, ...]:
     return tuple(name for name, s in SIMULATORS.items() if option in s.batch.batch_options)
 
 
+def taking_defect(kind: str) -> tuple[str, ...]:
+    """The names of the simulators whose batch simulates the defect ``kind``."""
+    return tuple(name for name, s in SIMULATORS.items() if kind in s.batch.defect_kinds)
+
+
 def make_backend(name: str, spec: SocketSpec, control_dt: float) -> Backend:
     """The single env's backend ``name`` for ``spec``."""
     return simulator(name, single=True).single(spec, control_dt)

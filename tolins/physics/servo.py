@@ -24,7 +24,7 @@ import numpy as np
 
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, model_layout
-from tolins.physics.protocol import BackendState
+from tolins.physics.protocol import BackendState, BatchState
 from tolins.physics.schedule import CONTACT_CHECKS, contact_chunks
 
 #: ``opt.disableflags`` bit that turns off every sensor.
@@ -299,6 +299,32 @@ class BatchServo:
         """Run simulation ``i`` on ``models[i]`` (one layout; read live by the batch)."""
         self.models = models
         self.batch.set_models(models)
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        """Reset simulations ``ids`` and place their workpieces at ``poses`` at rest, as
+        :meth:`ServoStepper.reset` one."""
+        self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
+        self.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
+        self.act[ids] = self.qpos[ids]
+        self.batch.forward(ids)
+        force = sequential_sum(self.sensordata[ids, self.layout.touch]) * FORCE_SCALE
+        return self.state(ids, force, None)
+
+    def state(
+        self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
+    ) -> BatchState:
+        """Simulations ``ids`` now, as :meth:`ServoStepper.state` one: poses, wrenches and
+        the given peak forces and faults."""
+        layout = self.layout
+        qpos, sensordata = self.qpos[ids], self.sensordata[ids]
+        theta = layout.pose_joint[2]
+        wrench = np.array(
+            [
+                board_wrench(q[theta], s[layout.force].tolist(), s[layout.torque_z])
+                for q, s in zip(qpos, sensordata, strict=True)
+            ]
+        ).reshape(len(ids), 4)
+        return BatchState(qpos[:, layout.pose_joint], wrench, peak_force, errors)
 
     def step(self, ids: np.ndarray, nstep: int, checks: int) -> tuple[np.ndarray, tuple]:
         """:func:`servo_control_step` of simulations ``ids`` under their commands."""

@@ -47,6 +47,12 @@ class Plan:
         stage = self.stages[name]
         return self.cache.folder(stage.name, stage.config).name
 
+    def folder(self, name: str, result: Path | None = None) -> Path:
+        """The folder of the stage ``name`` whose result is ``result`` (default: its
+        result in ``done``): a training's result is its policy file in the folder."""
+        value = self.done[name] if result is None else result
+        return value.parent if name in self.trainings else value
+
     def add(
         self,
         stage: Stage[Any],
@@ -121,7 +127,7 @@ def plan_trainings(
                     needs=tuple(demo.name for demo in stage.spec.demos),
                 )
                 if name in plan.cached:
-                    log(f"{name}: cached ({plan.cache.wall_s(plan.done[name].parent):.0f} s)")
+                    log(f"{name}: cached ({plan.cache.wall_s(plan.folder(name)):.0f} s)")
 
 
 def _policy(plan: Plan, agent: str, seed: int) -> tuple[str | None, str | None]:

@@ -54,12 +54,17 @@ class Profile:
     robustness_episodes: int = 6
 
     @property
+    def iteration_episodes(self) -> int:
+        """The episodes of one RS-GAIL iteration (per workpiece): ``popsize ×
+        candidate_episodes`` candidate episodes and ``curve_episodes`` of the mean."""
+        return self.popsize * self.candidate_episodes + self.curve_episodes
+
+    @property
     def rs_gail_env_steps(self) -> int:
-        """The most env steps RS-GAIL takes for π_n: per iteration, ``popsize ×
-        candidate_episodes`` candidate episodes and ``curve_episodes`` of the mean, each at
-        most ``HORIZON`` steps (BC's expert demonstrations not counted)."""
-        per_iteration = self.popsize * self.candidate_episodes + self.curve_episodes
-        return self.nominal_iterations * per_iteration * HORIZON
+        """The most env steps RS-GAIL takes for π_n: :attr:`iteration_episodes` per
+        iteration, each at most ``HORIZON`` steps (BC's expert demonstrations not
+        counted)."""
+        return self.nominal_iterations * self.iteration_episodes * HORIZON
 
     @property
     def deep_rl_env_steps(self) -> int:

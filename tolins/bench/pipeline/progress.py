@@ -26,9 +26,11 @@ from typing import Any
 
 from tqdm import tqdm
 
+from tolins.bench.jobs import robustness, row_evaluation, study
 from tolins.bench.jobs.robustness import PREFIX as ROBUST
 from tolins.bench.jobs.trajectories import NAME as TRAJECTORIES
 from tolins.bench.jobs.trajectories import POINTS as TRAJECTORY_EPISODES
+from tolins.bench.pipeline import settings
 from tolins.bench.pipeline.profiles import Profile
 from tolins.bench.table.robustness import CONDITIONS, POLICIES
 from tolins.bench.table.rows import ALL_ROWS, SB3_METHODS, TRAININGS
@@ -66,13 +68,13 @@ def stage_kind(name: str) -> str:
         return "evaluation"
     if name.startswith(ROBUST):
         return "robustness"
-    return "study" if name == "inference-study" else "training"
+    return "study" if name == study.NAME else "training"
 
 
 def expected_cost(name: str, profile: Profile, backend: str) -> float:
     """The expected wall time (s) of the stage ``name`` under ``profile`` on ``backend``
     (a name the bench does not make costs :data:`STAGE_SECONDS`)."""
-    steps, per_step = _budget(name.rpartition("-seed")[0] or name, stage_kind(name), profile)
+    steps, per_step = _budget(name, stage_kind(name), profile, backend)
     if per_step == "study" and backend == "kinematic":
         per_step = "study-model"
     elif per_step != "bc" and backend == "kinematic":
@@ -81,20 +83,29 @@ def expected_cost(name: str, profile: Profile, backend: str) -> float:
     return fixed + steps * STEP_SECONDS.get(per_step, 0.0)
 
 
-def _budget(base: str, kind: str, profile: Profile) -> tuple[float, str]:
-    """The budgeted work of a stage (its name less ``-seedN``) and its unit of cost."""
+def _unseeded(name: str) -> str:
+    """The stage name ``name`` less its ``-seedN`` (``name`` itself without one)."""
+    return name.rpartition("-seed")[0] or name
+
+
+def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float, str]:
+    """The budgeted work of the stage ``name`` of ``kind`` and its unit of cost."""
+    base = _unseeded(name)
     if kind == "demonstrations":
         return profile.demonstrations * HORIZON, "rollout"
     if kind == "study":
-        return profile.study_samples + 3 * min(12, profile.study_samples), "study"
-    if kind == "evaluation" and base == TRAJECTORIES.rpartition("-seed")[0]:
+        config = settings.study_settings(profile, backend)
+        return config.samples + (len(config.kinds) - 1) * config.kind_samples, "study"
+    if kind == "evaluation" and name == TRAJECTORIES:
         return (TRAJECTORY_EPISODES + 1) * HORIZON, "rollout"
     if kind == "evaluation":
-        row = next((row for row in ALL_ROWS if f"eval-{row.id}" == base), None)
+        same = (row for row in ALL_ROWS if _unseeded(row_evaluation.stage_name(row, 0)) == base)
+        row = next(same, None)
         factor = INFERENCE_FACTOR if row is not None and row.inference else 1.0
         return profile.eval_episodes * HORIZON * factor, "rollout"
     if kind == "robustness":
-        policy = next((p for p in POLICIES if f"{ROBUST}{p.id}" == base), None)
+        policies = (p for p in POLICIES if _unseeded(robustness.stage_name(p, 0)) == base)
+        policy = next(policies, None)
         factor = INFERENCE_FACTOR if policy is not None and policy.inference else 1.0
         return profile.robustness_episodes * len(CONDITIONS) * HORIZON * factor, "rollout"
     training = TRAININGS.get(base)
@@ -105,9 +116,9 @@ def _budget(base: str, kind: str, profile: Profile) -> tuple[float, str]:
         return profile.deep_rl_env_steps, training.method
     if training.method == "bc":
         return profile.bc_epochs * profile.demonstrations * envs * HORIZON, "bc"
-    per_iteration = profile.popsize * profile.candidate_episodes + profile.curve_episodes
     if training.method == "tolerance-guided":
-        return profile.residual_iterations * per_iteration * HORIZON * envs, training.method
+        steps = profile.residual_iterations * profile.iteration_episodes * HORIZON * envs
+        return steps, training.method
     return profile.rs_gail_env_steps * envs, training.method
 
 

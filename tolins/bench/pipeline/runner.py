@@ -91,13 +91,9 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
                     on_done=lambda job, result: _log_done(job, result, plan, log, stages),
                 )
             )
-        run.stage_times = _stage_times(plan, cache, executor.placement)
+        _record_stages(run, plan, cache, executor.placement)
     finally:
         executor.close()
-    for name, value in plan.done.items():
-        folder = value.parent if name in plan.trainings else value
-        run.stage_folders[name] = folder
-        run.stage_wall_s[name] = cache.wall_s(folder)
     run.cached += [name for name in plan.done if name in plan.cached]
     for row in rows:
         run.episodes[row.id] = [
@@ -135,7 +131,7 @@ def _log_start(job: Job, plan: Plan, log: Callable[[str], None], stages: BenchPr
 def _log_done(
     job: Job, result: Path, plan: Plan, log: Callable[[str], None], stages: BenchProgress
 ) -> None:
-    wall_s = plan.cache.wall_s(result.parent if job.name in plan.trainings else result)
+    wall_s = plan.cache.wall_s(plan.folder(job.name, result))
     stages.finish(job.name, wall_s)
     if job.name.startswith("demos-"):
         log(f"{job.name}: {plan.stages[job.name].spec.episodes} episodes written ({wall_s:.0f} s)")
@@ -145,14 +141,17 @@ def _log_done(
         log(f"{job.name}: trained ({wall_s:.0f} s)")
 
 
-def _stage_times(
-    plan: Plan, cache: StageCache, placement: dict[str, dict[str, Any]]
-) -> dict[str, dict[str, Any]]:
-    """When and where each stage ran (from its marker and the executor), and if cached."""
-    times = {}
-    for name, value in plan.done.items():
-        marker = cache.record(value.parent if name in plan.trainings else value)
-        times[name] = {
+def _record_stages(
+    run: BenchRun, plan: Plan, cache: StageCache, placement: dict[str, dict[str, Any]]
+) -> None:
+    """Each finished stage's folder and wall time, and when and where it ran (from its
+    marker and the executor), and if cached, into ``run``."""
+    for name in plan.done:
+        folder = plan.folder(name)
+        marker = cache.record(folder)
+        run.stage_folders[name] = folder
+        run.stage_wall_s[name] = float(marker["wall_s"])
+        run.stage_times[name] = {
             "started": marker.get("started"),
             "finished": marker.get("finished"),
             "wall_s": marker["wall_s"],
@@ -160,4 +159,3 @@ def _stage_times(
             **{"host": marker.get("host"), "pid": marker.get("pid")},
             **placement.get(name, {}),
         }
-    return times

@@ -10,13 +10,14 @@ from typing import TYPE_CHECKING, Any
 
 from tolins.atomic import atomic_json, atomic_write
 from tolins.bench.jobs import study
-from tolins.bench.jobs.row_evaluation import RECORDING
+from tolins.bench.jobs.row_evaluation import RECORDING, stage_name
 from tolins.bench.reports.figures import write_figures
 from tolins.bench.reports.markdown import format_markdown
 from tolins.bench.reports.robustness import plot_robustness
 from tolins.bench.store.integrity import StageFileError
 from tolins.bench.table.results import read_results, results_document
 from tolins.bench.table.robustness import KEY
+from tolins.bench.table.rows import ALL_ROWS
 from tolins.physics import BACKENDS
 
 if TYPE_CHECKING:
@@ -63,9 +64,10 @@ def _copy(source: Path, folder: Path, name: str | None = None) -> Path:
 def _recordings(run: BenchRun, out: Path) -> list[Path]:
     from tolins.record import RrdError, check_rrd
 
+    rows = {row.id: row for row in ALL_ROWS}
     written = []
     for row_id in run.results:
-        source = run.stage_folders[f"eval-{row_id}-seed0"] / RECORDING
+        source = run.stage_folders[stage_name(rows[row_id], 0)] / RECORDING
         if source.is_file():
             try:  # a truncated recording is not shipped as the row's
                 check_rrd(source)

@@ -49,9 +49,7 @@ def make_actor(entry: str | PolicyRef, socket: SocketSpec) -> Callable[[np.ndarr
     if entry in EXPERTS:
         return EXPERTS[entry]()
     name, sep, rest = entry.partition("=")
-    path = Path(rest if sep and name.isidentifier() else entry)
-    if path.is_dir() and (path / POLICY_FILE).is_file():
-        path = path / POLICY_FILE
+    path = _policy_path(Path(rest if sep and name.isidentifier() else entry))
     if path.suffix == ".zip" or path.is_file():
         return _saved(path, entry, socket)
     if ":" in entry and not sep:
@@ -71,10 +69,14 @@ def _referenced(ref: PolicyRef, socket: SocketSpec) -> Callable[[np.ndarray], np
             allowed = ", ".join(EXPERTS)
             raise ValueError(f"policy {ref.name!r}: no such expert; allowed: {allowed}")
         return EXPERTS[ref.name]()
-    path = Path(ref.path)
+    return _saved(_policy_path(Path(ref.path)), f"{ref.name}={ref.path}", socket)
+
+
+def _policy_path(path: Path) -> Path:
+    """``path``, or its ``policy.pt`` when ``path`` is a run's folder holding one."""
     if path.is_dir() and (path / POLICY_FILE).is_file():
-        path = path / POLICY_FILE
-    return _saved(path, f"{ref.name}={ref.path}", socket)
+        return path / POLICY_FILE
+    return path
 
 
 def _saved(path: Path, entry: str, socket: SocketSpec) -> Callable[[np.ndarray], np.ndarray]:

@@ -21,14 +21,14 @@ from tolins.learning.curves import plot_curves, write_curves_csv
 from tolins.learning.imitation.bc import BCResult, behaviour_clone
 from tolins.learning.imitation.config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
 from tolins.learning.imitation.demonstrations import collect
-from tolins.learning.imitation.policy import Policy, load_policy, save_policy
+from tolins.learning.imitation.policy import load_policy, save_policy
 from tolins.learning.imitation.rs_gail import (
     RSGailResult,
     Workpiece,
     check_resumable,
     train_rs_gail,
 )
-from tolins.learning.imitation.tolerance_guided import tolerance_guided_policy, workpieces
+from tolins.learning.imitation.tolerance_guided import train_tolerance_guided, workpieces
 from tolins.rollouts.episodes import Episode
 from tolins.rollouts.pool import CandidatePool
 
@@ -123,8 +123,21 @@ def run_rs_gail(
     expert = demonstrations([env_id], task) if demos is None else demos.rollouts
     if init is None:
         policy = behaviour_clone(expert, bc, seed=task.seed).policy
-    search = _Search(task, out, metadata, resume, progress, pool)
-    return search.run(policy, [Workpiece(env_id)], expert, rs_gail, f"RS-GAIL on {env_id}")
+    result = train_rs_gail(
+        policy,
+        [Workpiece(env_id)],
+        expert,
+        rs_gail,
+        seed=task.seed,
+        backend=task.backend,
+        out=out,
+        metadata=metadata,
+        resume=resume,
+        progress=progress,
+        pool=pool,
+    )
+    _finish(out, result, metadata, f"RS-GAIL on {env_id}")
+    return result
 
 
 def run_tolerance_guided(
@@ -157,49 +170,22 @@ def run_tolerance_guided(
     policy, _ = load_policy(nominal, kind="nominal")
     pieces = workpieces(env_ids)
     expert = demonstrations(env_ids, task) if demos is None else demos.rollouts
-    guided = tolerance_guided_policy(policy, pieces, residual)
-    search = _Search(task, out, metadata, resume, progress, pool)
-    return search.run(guided, pieces, expert, rs_gail, f"tolerance-guided on {', '.join(env_ids)}")
-
-
-@dataclass(frozen=True)
-class _Search:
-    """Where and how a run's RS-GAIL search goes: the task's seed and backend, the run
-    folder ``out`` with the ``metadata`` its artefacts record, and the search's options
-    (:func:`~tolins.learning.imitation.rs_gail.train_rs_gail`)."""
-
-    task: TaskConfig
-    out: Path
-    metadata: dict[str, Any]
-    resume: bool
-    progress: bool
-    pool: CandidatePool | None
-
-    def run(
-        self,
-        policy: Policy,
-        pieces: list[Workpiece],
-        expert: list[Episode],
-        rs_gail: RSGailConfig,
-        title: str,
-    ) -> RSGailResult:
-        """RS-GAIL from ``policy`` on ``pieces`` imitating ``expert``, then the run's
-        artefacts, its curves titled ``title``."""
-        result = train_rs_gail(
-            policy,
-            pieces,
-            expert,
-            rs_gail,
-            seed=self.task.seed,
-            backend=self.task.backend,
-            out=self.out,
-            metadata=self.metadata,
-            resume=self.resume,
-            progress=self.progress,
-            pool=self.pool,
-        )
-        _finish(self.out, result, self.metadata, title)
-        return result
+    result = train_tolerance_guided(
+        policy,
+        pieces,
+        expert,
+        rs_gail,
+        residual,
+        seed=task.seed,
+        backend=task.backend,
+        out=out,
+        metadata=metadata,
+        resume=resume,
+        progress=progress,
+        pool=pool,
+    )
+    _finish(out, result, metadata, f"tolerance-guided on {', '.join(env_ids)}")
+    return result
 
 
 def _relative(path: str | Path, out: Path) -> str:

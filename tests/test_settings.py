@@ -487,7 +487,7 @@ def _skip_without_egl(result: subprocess.CompletedProcess) -> None:
 
 def test_renderers_from_open_renderer_close_before_opengl_exits() -> None:
     plain = _exit_without_close("""
-        env = gym.make("tolins/Circle2x2-v1"); env.reset(seed=0)
+        env = gym.make("tolins/Circle2x2-v2"); env.reset(seed=0)
         renderer = mujoco.Renderer(env.unwrapped.backend.model, 48, 64)
         renderer.update_scene(env.unwrapped.backend.data); renderer.render()
     """)
@@ -496,7 +496,7 @@ def test_renderers_from_open_renderer_close_before_opengl_exits() -> None:
         pytest.skip("an unclosed mujoco.Renderer exits cleanly with this OpenGL")
     result = _exit_without_close("""
         from tolins.envs.rendering import open_renderer
-        env = gym.make("tolins/Circle2x2-v1"); env.reset(seed=0)
+        env = gym.make("tolins/Circle2x2-v2"); env.reset(seed=0)
         renderers = [open_renderer(env.unwrapped.backend.model, 48, 64) for _ in range(2)]
         for renderer in renderers:
             renderer.update_scene(env.unwrapped.backend.data); renderer.render()
@@ -507,7 +507,7 @@ def test_renderers_from_open_renderer_close_before_opengl_exits() -> None:
 
 def test_an_env_that_rendered_and_was_not_closed_exits_cleanly() -> None:
     result = _exit_without_close("""
-        env = gym.make("tolins/Circle2x2-v1", render_mode="rgb_array"); env.reset(seed=0)
+        env = gym.make("tolins/Circle2x2-v2", render_mode="rgb_array"); env.reset(seed=0)
         assert env.render().shape == (480, 640, 3)
     """)
     _skip_without_egl(result)

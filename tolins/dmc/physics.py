@@ -14,6 +14,8 @@ from tolins.mjcf import make_mjcf
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.servo import ServoStepper
+from tolins.physics.versions import VERSIONS, PhysicsVersion
+from tolins.physics.versions import physics_version as physics_version_of
 
 
 class InsertionPhysics(dm_mujoco.Physics):
@@ -29,9 +31,16 @@ class InsertionPhysics(dm_mujoco.Physics):
     ``named``, ``render``, ``get_state``/``set_state``, is plain dm_control.
     """
 
+    #: The physics version (:mod:`tolins.physics.versions`); :meth:`from_spec` sets it.
+    version: PhysicsVersion = VERSIONS[1]
+
     def _reload_from_data(self, data: dm_mujoco.wrapper.MjData) -> None:
         super()._reload_from_data(data)
-        self.stepper = ServoStepper(self.model.ptr, self.data.ptr)
+        self._bind_stepper()
+
+    def _bind_stepper(self) -> None:
+        free_flight = self.version.free_flight
+        self.stepper = ServoStepper(self.model.ptr, self.data.ptr, free_flight=free_flight)
         self.last_state = self.stepper.state(self.stepper.contact_force())
         self._saved: mujoco.MjData | None = None
 
@@ -54,13 +63,18 @@ class InsertionPhysics(dm_mujoco.Physics):
             raise
 
     @classmethod
-    def from_spec(cls, spec: SocketSpec) -> InsertionPhysics:
-        """The physics of ``spec``'s board and workpiece."""
-        return cls.from_xml_string(make_mjcf(spec))
+    def from_spec(cls, spec: SocketSpec, physics_version: int = 1) -> InsertionPhysics:
+        """The physics of ``spec``'s board and workpiece in a physics version."""
+        version = physics_version_of(physics_version)
+        physics = cls.from_xml_string(make_mjcf(spec, board_body=not version.board_in_world))
+        if version is not physics.version:
+            physics.version = version
+            physics._bind_stepper()
+        return physics
 
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
-        self.reload_from_xml_string(make_mjcf(spec))
+        self.reload_from_xml_string(make_mjcf(spec, board_body=not self.version.board_in_world))
 
     def set_physics(self, draw: PhysicsDraw | None) -> None:
         """Apply a randomised-physics ``draw`` to the model from its nominal values

@@ -40,7 +40,7 @@ def make_environment(
     environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
     insert = Insert(task.socket, control_dt=environment_kwargs["control_timestep"], **task_kwargs)
     environment_kwargs["control_timestep"] = insert.settings.control_dt
-    physics = InsertionPhysics.from_spec(task.socket)
+    physics = InsertionPhysics.from_spec(task.socket, insert.settings.physics_version)
     return control.Environment(physics, insert, **environment_kwargs)
 
 

@@ -88,7 +88,9 @@ class Insert(control.Task):
     of the vector env hold; the task plans, starts and scores its episodes through them
     and turns the outcome into dm_control's observation, reward and discount.
     ``control_dt`` is the environment's ``control_timestep`` (s), validated by the settings
-    (:func:`tolins.dmc.make_environment` passes it).
+    (:func:`tolins.dmc.make_environment` passes it). ``physics_version`` (1, the default,
+    or 2: :mod:`tolins.physics.versions`) is the gym ids' ``-v1`` or ``-v2``; the suite
+    builds its physics in that version.
     """
 
     def __init__(
@@ -108,6 +110,7 @@ class Insert(control.Task):
         randomization: Any = None,
         defects: Any = None,
         control_dt: float = CONTROL_DT,
+        physics_version: int = 1,
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -123,6 +126,7 @@ class Insert(control.Task):
             reward_mode=reward_mode,
             randomization=randomization,
             defects=defects,
+            physics_version=physics_version,
         )
         self.episode = EpisodeState(self.settings, goal)
         self.pose = check_fixed_pose(self.settings, pose)
@@ -160,6 +164,12 @@ class Insert(control.Task):
         """Plan the episode (draw the workpiece, the physics and the initial pose, and check
         them), then rebuild or adjust the physics and place the workpiece; a failed plan
         changes nothing, the random state included (see **Failed reset**)."""
+        if physics.version.number != self.settings.physics_version:
+            raise ValueError(
+                f"the physics is version {physics.version.number} but the task's "
+                f"physics_version={self.settings.physics_version}; allowed: "
+                "InsertionPhysics.from_spec(socket, physics_version) of the task's version"
+            )
         random_state = self.random.bit_generator.state
         try:
             plan = self.episode.plan(self.random, pose=self.pose)

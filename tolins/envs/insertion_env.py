@@ -180,6 +180,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         randomization: Any = None,
         render_mode: str | None = None,
         defects: Any = None,
+        physics_version: int = 1,
         **unknown: Any,
     ) -> None:
         check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
@@ -199,12 +200,15 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             control_dt=control_dt,
             randomization=randomization,
             defects=defects,
+            physics_version=physics_version,
         )
         self.backend_name = backend
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
-        self.backend: Backend | None = chosen.single(socket, self.control_dt)
+        self.backend: Backend | None = chosen.single(
+            socket, self.control_dt, physics_version=self.physics_version
+        )
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
         self._closed = False

@@ -25,6 +25,7 @@ from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
 from tolins.physics.schedule import check_control_dt
+from tolins.physics.versions import physics_version
 
 #: Largest noise std of any measured quantity (mm, rad, N, N·mm): far beyond any sensor,
 #: it keeps every observation finite.
@@ -57,6 +58,8 @@ class TaskSettings:
             :func:`~tolins.geometry.defects.sample_defects` takes them (e.g. ``("burr",
             0.05)``, ``("blocked", None)``), after any bent pins of ``defect_sigma``; or
             ``None``.
+        physics_version: The MuJoCo physics, 1 or 2 (:mod:`tolins.physics.versions`; the
+            ``-v1`` and ``-v2`` ids).
     """
 
     socket: SocketSpec
@@ -71,6 +74,7 @@ class TaskSettings:
     reward_mode: str = "sparse"
     randomization: Any = None
     defects: Any = None
+    physics_version: int = 1
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -104,6 +108,7 @@ class TaskSettings:
         set_(self, "control_dt", check_control_dt(self.control_dt))
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "randomization", PhysicsRandomization.of(self.randomization))
+        set_(self, "physics_version", physics_version(self.physics_version).number)
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
             try:
@@ -168,6 +173,7 @@ class SettingsAttributes:
     randomization = setting("randomization")
     defects = setting("defects")
     control_dt = setting("control_dt")
+    physics_version = setting("physics_version")
 
 
 #: The keywords of :class:`TaskSettings` an env takes besides its socket.

@@ -14,6 +14,7 @@ from tolins.geometry.specs import (
     SocketSpec,
     with_clearance,
 )
+from tolins.physics.versions import VERSIONS
 
 ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
 #: The batched env of every id (``gymnasium.make_vec(..., vectorization_mode=
@@ -29,7 +30,8 @@ class Task:
     """One preset workpiece.
 
     Attributes:
-        name: Gymnasium name, ``tolins/{name}-v1``.
+        name: Gymnasium name, ``tolins/{name}-v1`` and ``tolins/{name}-v2`` (the physics
+            versions, :mod:`tolins.physics.versions`).
         domain: dm_control domain name (task ``insert``).
         socket: The (nominal) socket.
         tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``.
@@ -44,14 +46,26 @@ class Task:
 
     @property
     def gym_id(self) -> str:
-        return f"tolins/{self.name}-v1"
+        """The ``-v1`` id."""
+        return self.gym_id_of(1)
 
-    @property
-    def env_kwargs(self) -> dict[str, Any]:
+    def gym_id_of(self, version: int) -> str:
+        """The id of a physics version, ``tolins/{name}-v{version}``."""
+        return f"tolins/{self.name}-v{version}"
+
+    def env_kwargs_of(self, version: int) -> dict[str, Any]:
+        """The env's keywords under its id of a physics version."""
         kwargs: dict[str, Any] = {"socket": self.socket}
         if self.defect_sigma is not None:
             kwargs["defect_sigma"] = self.defect_sigma
+        if version != 1:
+            kwargs["physics_version"] = version
         return kwargs
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """The ``-v1`` id's keywords."""
+        return self.env_kwargs_of(1)
 
 
 def _circle(cols: int, *tags: str, defect_sigma: float | None = None) -> Task:
@@ -106,15 +120,21 @@ GRADE_TASKS: tuple[Task, ...] = tuple(
 #: Every preset: the paper's (``TASKS``), then the grades; gymnasium ids and dm_control
 #: domains are registered for each.
 PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
-#: The generic id; pass ``socket=`` (and any other keyword) to ``gymnasium.make``.
-GENERIC_ID = "tolins/Insert-v1"
+#: The generic ids by physics version; pass ``socket=`` (and any other keyword) to
+#: ``gymnasium.make``.
+GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in VERSIONS}
+GENERIC_ID = GENERIC_IDS[1]
 
 
 def env_ids(*, generic: bool = True) -> tuple[str, ...]:
-    """Every tolins gymnasium id: the presets' (the paper's, then the grades), then the
-    generic one (left out with ``generic=False``)."""
-    presets = tuple(task.gym_id for task in PRESETS)
-    return (*presets, GENERIC_ID) if generic else presets
+    """Every tolins gymnasium id, version by version: the presets' (the paper's, then the
+    grades), then the generic one (left out with ``generic=False``)."""
+    ids = []
+    for version in VERSIONS:
+        ids += [task.gym_id_of(version) for task in PRESETS]
+        if generic:
+            ids.append(GENERIC_IDS[version])
+    return tuple(ids)
 
 
 def check_env_id(env_id: str) -> str:
@@ -128,11 +148,14 @@ def check_env_id(env_id: str) -> str:
 def register_envs() -> None:
     """Register every preset (and the generic id) with gymnasium; safe to call twice."""
     entry_points = {"entry_point": ENTRY_POINT, "vector_entry_point": VECTOR_ENTRY_POINT}
-    for task in PRESETS:
-        if task.gym_id not in gym.registry:
-            gym.register(id=task.gym_id, kwargs=task.env_kwargs, **entry_points)
-    if GENERIC_ID not in gym.registry:
-        gym.register(id=GENERIC_ID, **entry_points)
+    for version in VERSIONS:
+        for task in PRESETS:
+            if task.gym_id_of(version) not in gym.registry:
+                kwargs = task.env_kwargs_of(version)
+                gym.register(id=task.gym_id_of(version), kwargs=kwargs, **entry_points)
+        if GENERIC_IDS[version] not in gym.registry:
+            kwargs = {} if version == 1 else {"physics_version": version}
+            gym.register(id=GENERIC_IDS[version], kwargs=kwargs, **entry_points)
 
 
 def make_vec(env_id: str, num_envs: int = 1, **kwargs: Any) -> gym.vector.VectorEnv:

@@ -212,6 +212,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             socket,
             self.num_envs,
             self.settings.control_dt,
+            physics_version=self.settings.physics_version,
             num_threads=num_threads,
             device=device,
             persistent=render_mode is not None,

@@ -60,6 +60,7 @@ from tolins.mjcf import model_layout
 from tolins.physics.compiled import SocketCache, compile_model
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.schedule import check_control_dt
+from tolins.physics.versions import physics_version as physics_version_of
 
 #: The binary contact force (N) and torque (N·mm) of a colliding workpiece.
 CONTACT_FORCE = 1.0
@@ -220,7 +221,10 @@ class KinematicBatch(Capabilities):
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS)
 
-    def __init__(self, socket: SocketSpec, num_envs: int, control_dt: float) -> None:
+    def __init__(
+        self, socket: SocketSpec, num_envs: int, control_dt: float, physics_version: int = 1
+    ) -> None:
+        physics_version_of(physics_version)  # the same simulator in every version
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         self.control_dt = check_control_dt(control_dt)
         self._sockets: list[SocketSpec] = [socket] * self.num_envs
@@ -303,9 +307,9 @@ class KinematicBackend(Capabilities):
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS)
 
-    def __init__(self, spec: SocketSpec, control_dt: float) -> None:
+    def __init__(self, spec: SocketSpec, control_dt: float, physics_version: int = 1) -> None:
         self.spec = spec
-        self._batch = KinematicBatch(spec, 1, control_dt)
+        self._batch = KinematicBatch(spec, 1, control_dt, physics_version)
 
     def set_socket(self, socket: SocketSpec) -> None:
         """Move ``socket``'s workpiece from the next reset on."""

@@ -31,11 +31,12 @@ from tolins.geometry.defects import DEFECT_KINDS
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE
-from tolins.physics.compiled import SocketCache, compile_model
+from tolins.physics.compiled import SocketCache, model_builder
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import control_plan
 from tolins.physics.servo import BatchServo, ServoStepper, pin_touch_points
+from tolins.physics.versions import physics_version as physics_version_of
 
 
 class MujocoBackend(Capabilities):
@@ -52,6 +53,7 @@ class MujocoBackend(Capabilities):
             ``peak_force`` (chunks as in :class:`ServoStepper`), 1 … the physics steps;
             default :func:`~tolins.physics.schedule.default_contact_checks` of the physics
             steps.
+        physics_version: 1 or 2 (:mod:`tolins.physics.versions`).
     """
 
     supports_render = True
@@ -60,13 +62,18 @@ class MujocoBackend(Capabilities):
     defect_kinds = frozenset(DEFECT_KINDS)
 
     def __init__(
-        self, spec: SocketSpec, control_dt: float, contact_checks: int | None = None
+        self,
+        spec: SocketSpec,
+        control_dt: float,
+        contact_checks: int | None = None,
+        physics_version: int = 1,
     ) -> None:
         self.control_dt = control_dt
+        self.version = physics_version_of(physics_version)
         self._contact_checks = contact_checks  # as asked: None for the default
         # The nominal model and the workpiece's now; a model is left here at its nominal
         # physics, so a workpiece that comes back starts from its compiled values.
-        self._compiled = SocketCache(compile_model, spec, size=1)
+        self._compiled = SocketCache(model_builder(physics_version), spec, size=1)
         self._load(spec)
 
     def _load(self, spec: SocketSpec) -> None:
@@ -75,7 +82,7 @@ class MujocoBackend(Capabilities):
         self.model = self._compiled.get(spec)
         self.data = mujoco.MjData(self.model)
         self.substeps, checks = control_plan(self.model, self.control_dt, self._contact_checks)
-        self.stepper = ServoStepper(self.model, self.data, checks)
+        self.stepper = ServoStepper(self.model, self.data, checks, self.version.free_flight)
         self._nominal: dict[str, np.ndarray] | None = None
 
     def set_socket(self, socket: SocketSpec) -> None:
@@ -152,6 +159,7 @@ class MujocoBatch(Capabilities):
         persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``), so
             that :meth:`pin_touch_points` can read a simulation's contacts and
             :meth:`drawing` its whole data.
+        physics_version: 1 or 2 (:mod:`tolins.physics.versions`), as the single env's.
     """
 
     supports_render = True
@@ -168,22 +176,27 @@ class MujocoBatch(Capabilities):
         num_threads: int | None = None,
         contact_checks: int | None = None,
         persistent: bool = False,
+        physics_version: int = 1,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = default_threads() if num_threads is None else num_threads
         self.num_threads = check_threads(threads)
+        self.version = physics_version_of(physics_version)
         self.socket = socket
-        self.model = compile_model(socket)
+        build = model_builder(physics_version)
+        self.model = build(socket)
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         # The batch and the arrays bound to it. The models a simulation runs on are read
         # live; ``_models`` holds what the next call applies (a bent-pin draw replaces its
         # simulation's).
-        self._servo = BatchServo(self.model, self.num_envs, self.num_threads, persistent)
+        self._servo = BatchServo(
+            self.model, self.num_envs, self.num_threads, persistent, self.version.free_flight
+        )
         self.batch = self._servo.batch
         self._models = list(self._servo.models)
         self._sockets: list[SocketSpec] = [socket] * self.num_envs
         # The workpieces' models: the nominal one and the last 2 num_envs others.
-        self._compiled = SocketCache(compile_model, socket, 2 * self.num_envs, own=self.model)
+        self._compiled = SocketCache(build, socket, 2 * self.num_envs, own=self.model)
         self._models_changed = False
         self.layout = self._servo.layout
         self._drawing: mujoco.MjData | None = None

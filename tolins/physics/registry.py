@@ -24,9 +24,9 @@ class Simulator:
     Attributes:
         name: Its ``backend=`` name.
         batch: The vector env's batch class: ``batch(socket, num_envs, control_dt,
-            **options)`` with the options of its ``batch_options``.
-        single: The single env's backend class, ``single(spec, control_dt)``; ``None`` for
-            a simulator that only runs batches.
+            physics_version=..., **options)`` with the options of its ``batch_options``.
+        single: The single env's backend class, ``single(spec, control_dt,
+            physics_version=...)``; ``None`` for a simulator that only runs batches.
     """
 
     name: str
@@ -75,9 +75,11 @@ def taking_defect(kind: str) -> tuple[str, ...]:
     return tuple(name for name, s in SIMULATORS.items() if kind in s.batch.defect_kinds)
 
 
-def make_backend(name: str, spec: SocketSpec, control_dt: float) -> Backend:
-    """The single env's backend ``name`` for ``spec``."""
-    return simulator(name, single=True).single(spec, control_dt)
+def make_backend(
+    name: str, spec: SocketSpec, control_dt: float, physics_version: int = 1
+) -> Backend:
+    """The single env's backend ``name`` for ``spec`` (:mod:`tolins.physics.versions`)."""
+    return simulator(name, single=True).single(spec, control_dt, physics_version=physics_version)
 
 
 def make_batch(
@@ -86,6 +88,7 @@ def make_batch(
     num_envs: int,
     control_dt: float,
     *,
+    physics_version: int = 1,
     num_threads: int | None = None,
     device: str | None = None,
     persistent: bool = False,
@@ -102,4 +105,4 @@ def make_batch(
         raise ValueError(f"device={device!r} is for backend={on} only; got backend={name!r}")
     given = {"num_threads": num_threads, "device": device, "persistent": persistent}
     options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
-    return cls(socket, num_envs, control_dt, **options)
+    return cls(socket, num_envs, control_dt, physics_version=physics_version, **options)

@@ -14,8 +14,9 @@ points) are shared by every MuJoCo stepper.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Collection, Iterable, Iterator
 from typing import Protocol
 
 import mujoco
@@ -24,6 +25,13 @@ import numpy as np
 
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, model_layout
+from tolins.physics.free_flight import (
+    FreeStep,
+    ServoLimits,
+    free_flight_plan,
+    free_steps,
+    servo_limits,
+)
 from tolins.physics.protocol import BackendState, BatchState
 from tolins.physics.schedule import CONTACT_CHECKS, contact_chunks
 
@@ -43,6 +51,49 @@ def sensors_off(models: Iterable[mujoco.MjModel]) -> Iterator[None]:
     finally:
         for model, value in flags:
             model.opt.disableflags = value
+
+
+@contextlib.contextmanager
+def longer_steps(models: Iterable[mujoco.MjModel], factor: int) -> Iterator[None]:
+    """The models' physics step ``factor`` times as long inside the block (free flight,
+    :mod:`tolins.physics.free_flight`), restored after it."""
+    steps = [(model, model.opt.timestep) for model in models] if factor > 1 else []
+    for model, value in steps:
+        model.opt.timestep = value * factor
+    try:
+        yield
+    finally:
+        for model, value in steps:
+            model.opt.timestep = value
+
+
+def run_segments(
+    step: Callable[[int], None],
+    models: Collection[mujoco.MjModel],
+    segments: list[tuple[int, int]],
+    lazy_sensors: bool,
+) -> None:
+    """Run ``segments``, ``(factor, steps)`` each, through ``step(nstep)`` on ``models``: each
+    segment's physics steps ``factor`` contact steps long; with ``lazy_sensors`` the sensors
+    computed in the very last step only."""
+    segments = [(factor, steps) for factor, steps in segments if steps]
+    for i, (factor, steps) in enumerate(segments):
+        last = i == len(segments) - 1
+        with longer_steps(models, factor):
+            quiet = steps - 1 if last else steps
+            if lazy_sensors and quiet:
+                with sensors_off(models):
+                    step(quiet)
+                steps -= quiet
+            if steps:
+                step(steps)
+
+
+def chunk_segments(n: int, window: int, factor: int) -> tuple[list[tuple[int, int]], int]:
+    """The segments of a chunk of ``n`` contact steps when ``window`` contact steps are left
+    before the longer ``factor`` steps, and the window left after it."""
+    first = min(window, n)
+    return [(1, first), (factor, (n - first) // factor)], window - first
 
 
 def board_wrench(theta: float, force: list[float], torque_z: float) -> np.ndarray:
@@ -99,11 +150,17 @@ class ServoSimulations(Protocol):
     def anchor(self) -> None:
         """Reset every servo's integrated set-point to its joint's position."""
 
+    def choose_steps(self, chunks: list[int]) -> None:
+        """Choose each simulation's physics step for this control step of ``chunks``
+        (contact steps between the reads): the contact step, or a longer one in free flight
+        (:mod:`tolins.physics.free_flight`)."""
+
     def no_force(self) -> float | np.ndarray:
         """The peak force before the first read (zero per simulation)."""
 
     def physics_steps(self, n: int) -> None:
-        """``n`` physics steps under the current command, the sensors computed in the last."""
+        """``n`` contact steps' time under the current command, in the physics steps
+        chosen, the sensors computed in the last."""
 
     def higher_force(self, peak: float | np.ndarray) -> float | np.ndarray:
         """``max(peak, the summed touch force now)`` per simulation (model units)."""
@@ -120,11 +177,14 @@ def servo_control_step(
     servos re-anchored (so a blocked workpiece stops at the first contact and pushes with
     at most the servo's force limit instead of winding up), then ``checks`` chunks of
     physics steps (:func:`~tolins.physics.schedule.contact_chunks`), the summed normal pin
-    force read after each. Returns the peak force (model units) and the faults."""
+    force read after each; in free flight (with ``-v2`` physics) on longer physics steps.
+    Returns the peak force (model units) and the faults."""
     before = sims.warning_counts()
     sims.anchor()
+    chunks = contact_chunks(nstep, checks)
+    sims.choose_steps(chunks)
     peak = sims.no_force()
-    for n in contact_chunks(nstep, checks):
+    for n in chunks:
         sims.physics_steps(n)
         peak = sims.higher_force(peak)
     return peak, sims.faults(before)
@@ -143,17 +203,29 @@ class ServoStepper:
     (evenly spaced whenever ``contact_checks`` divides ``nstep``: 5 reads 50 steps apart
     at the default 0.25 s).
 
+    With ``free_flight``, a control step in which nothing can touch runs on longer physics
+    steps (:mod:`tolins.physics.free_flight`; ``-v2`` physics); :attr:`step_factor` says by
+    how much the last one did (after a window of contact steps).
+
     Args:
         model: A model made by :func:`tolins.make_mjcf`.
         data: Its data; read and written in place.
         contact_checks: Contact-force reads per control step (at most).
+        free_flight: Take the longer step where nothing can touch.
     """
 
     def __init__(
-        self, model: mujoco.MjModel, data: mujoco.MjData, contact_checks: int = CONTACT_CHECKS
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        contact_checks: int = CONTACT_CHECKS,
+        free_flight: bool = False,
     ) -> None:
         contact_checks = check_int("contact_checks", contact_checks, minimum=1)
         self.checks = contact_checks
+        self.free_flight = free_flight
+        self.step_window, self.step_factor = 0, 1
+        self._limits: ServoLimits | None = None
         self._bind(model, data)
 
     def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
@@ -201,8 +273,11 @@ class ServoStepper:
         return pin_touch_points(self.model, self.data, self.layout.pin_by_geom)
 
     def reset(self, pose: np.ndarray) -> BackendState:
-        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
+        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest
+        (the model's parameters are read anew: a randomised-physics draw applies from here)."""
         m, d = self.model, self.data
+        if self.free_flight:
+            self._limits = ServoLimits.stack([servo_limits(m)])
         mujoco.mj_resetData(m, d)
         d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
         d.act[:] = d.qpos
@@ -233,18 +308,30 @@ class ServoStepper:
     def anchor(self) -> None:
         self.data.act[:] = self.data.qpos
 
+    def choose_steps(self, chunks: list[int]) -> None:
+        self.step_window, self.step_factor = 0, 1
+        if self.free_flight and self._limits is not None:
+            d, timestep = self.data, self.model.opt.timestep
+            window, factor = free_flight_plan(
+                self._limits,
+                d.qpos[None],
+                d.qvel[None],
+                d.ctrl[None],
+                sum(chunks) * timestep,
+                _free_steps(timestep, tuple(chunks)),
+            )
+            self.step_window, self.step_factor = int(window[0]), int(factor[0])
+
     def no_force(self) -> float:
         return 0.0
 
     def physics_steps(self, n: int) -> None:
-        """``n`` physics steps. With :attr:`lazy_sensors` the model's sensors are switched
-        off for all but the last, so the model must not be stepped elsewhere meanwhile."""
+        """``n`` contact steps' time in the chosen physics steps. With :attr:`lazy_sensors`
+        the model's sensors are switched off for all but the last step, so the model must
+        not be stepped elsewhere meanwhile."""
         m, d = self.model, self.data
-        if self.lazy_sensors and n > 1:
-            with sensors_off([m]):
-                mujoco.mj_step(m, d, nstep=n - 1)
-            n = 1
-        mujoco.mj_step(m, d, nstep=n)
+        segments, self.step_window = chunk_segments(n, self.step_window, self.step_factor)
+        run_segments(lambda k: mujoco.mj_step(m, d, nstep=k), [m], segments, self.lazy_sensors)
 
     def higher_force(self, peak: float) -> float:
         return max(peak, sum(self._touch.tolist()))
@@ -257,6 +344,12 @@ class ServoStepper:
         """Command ``velocity`` ``[ux, uy, utheta, uz]`` for ``nstep`` physics steps."""
         self.command(velocity)
         return self.advance(nstep)
+
+
+@functools.lru_cache(maxsize=64)
+def _free_steps(timestep: float, chunks: tuple[int, ...]) -> list[FreeStep]:
+    """:func:`~tolins.physics.free_flight.free_steps`, kept per control-step schedule."""
+    return free_steps(timestep, list(chunks))
 
 
 def sequential_sum(columns: np.ndarray) -> np.ndarray:
@@ -279,26 +372,47 @@ class BatchServo:
         num_envs: Number of simulations.
         num_threads: Threads of the batch, including the caller's.
         persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``).
+        free_flight: Take the longer step where nothing can touch, per simulation, as
+            :class:`ServoStepper` does.
     """
 
     def __init__(
-        self, model: mujoco.MjModel, num_envs: int, num_threads: int, persistent: bool
+        self,
+        model: mujoco.MjModel,
+        num_envs: int,
+        num_threads: int,
+        persistent: bool,
+        free_flight: bool = False,
     ) -> None:
         self.batch = b = mujoco.batch.Batch(
             model, num_envs, nthread=num_threads, persistent=persistent
         )
         self.layout = model_layout(model)
-        self.models = [model] * num_envs
-        b.set_models(self.models)
+        self.free_flight = free_flight
+        self._limits_of: dict[int, tuple[mujoco.MjModel, ServoLimits]] = {}
+        self.set_models([model] * num_envs)
         self.qpos, self.qvel = b.bind("qpos"), b.bind("qvel")
         self.act, self.ctrl = b.bind("act"), b.bind("ctrl")
         self.sensordata = b.bind("sensordata")
         self.ids = np.zeros(0, dtype=np.intp)
+        self.step_windows = np.zeros(0, dtype=np.intp)
+        self.step_factors = np.ones(0, dtype=np.intp)
 
     def set_models(self, models: list[mujoco.MjModel]) -> None:
-        """Run simulation ``i`` on ``models[i]`` (one layout; read live by the batch)."""
+        """Run simulation ``i`` on ``models[i]`` (one layout; read live by the batch; a
+        model's parameters are read anew here, so set it again after changing them)."""
         self.models = models
         self.batch.set_models(models)
+        if self.free_flight:
+            known, self._limits_of = self._limits_of, {}
+            for model in models:
+                if id(model) not in self._limits_of:
+                    # A model is never changed once a batch runs on it (a randomised draw
+                    # is a new copy), so the limits of one seen before still hold.
+                    entry = known.get(id(model))
+                    limits = entry[1] if entry is not None else servo_limits(model)
+                    self._limits_of[id(model)] = (model, limits)
+            self._limits = ServoLimits.stack([self._limits_of[id(m)][1] for m in models])
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         """Reset simulations ``ids`` and place their workpieces at ``poses`` at rest, as
@@ -340,18 +454,40 @@ class BatchServo:
     def anchor(self) -> None:
         self.act[self.ids] = self.qpos[self.ids]
 
+    def choose_steps(self, chunks: list[int]) -> None:
+        ids = self.ids
+        self.step_windows = np.zeros(len(ids), dtype=np.intp)
+        self.step_factors = np.ones(len(ids), dtype=np.intp)
+        if self.free_flight and len(ids):
+            timestep = self.models[0].opt.timestep
+            self.step_windows, self.step_factors = free_flight_plan(
+                self._limits.rows(ids),
+                self.qpos[ids],
+                self.qvel[ids],
+                self.ctrl[ids],
+                sum(chunks) * timestep,
+                _free_steps(timestep, tuple(chunks)),
+            )
+
     def no_force(self) -> np.ndarray:
         return np.zeros(len(self.ids))
 
     def physics_steps(self, n: int) -> None:
-        """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``."""
-        ids = self.ids
-        if ServoStepper.lazy_sensors and n > 1:
-            models = {id(self.models[i]): self.models[i] for i in ids.tolist()}.values()
-            with sensors_off(models):
-                self.batch.step(ids, nstep=n - 1)
-            n = 1
-        self.batch.step(ids, nstep=n)
+        """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``: one
+        ``Batch.step`` per physics step length chosen."""
+        plans = np.stack([self.step_windows, self.step_factors], axis=1)
+        for window, factor in np.unique(plans, axis=0).tolist():
+            chosen = (self.step_windows == window) & (self.step_factors == factor)
+            ids = self.ids[chosen]
+            models = list({id(self.models[i]): self.models[i] for i in ids.tolist()}.values())
+            segments, left = chunk_segments(n, window, factor)
+            self.step_windows[chosen] = left
+            run_segments(
+                lambda k, ids=ids: self.batch.step(ids, nstep=k),
+                models,
+                segments,
+                ServoStepper.lazy_sensors,
+            )
 
     def higher_force(self, peak: np.ndarray) -> np.ndarray:
         touch = sequential_sum(self.sensordata[self.ids, self.layout.touch])

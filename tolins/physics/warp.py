@@ -38,7 +38,7 @@ import numpy as np
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, bend_fields, model_layout
-from tolins.physics.compiled import compile_model
+from tolins.physics.compiled import model_builder
 from tolins.physics.protocol import BatchState, Capabilities
 from tolins.physics.schedule import contact_chunks, control_plan
 
@@ -120,6 +120,10 @@ class WarpBatch(Capabilities):
         contact_checks: Contact-force reads per control step; default as the single env.
         nconmax: Contacts per world; default pins × :data:`CONTACTS_PER_PIN` (≥ 16).
         njmax: Constraint rows per world; default ``3 * nconmax`` plus two per joint.
+        physics_version: 1 or 2 (:mod:`tolins.physics.versions`): version 2's model (the
+            board in the world body). Its worlds step on the contact step throughout, free
+            flight included, so they follow C MuJoCo's ``-v2`` within the free-flight bound
+            rather than bit for bit (Warp is compared with C MuJoCo by tolerance anyway).
     """
 
     supports_render = False
@@ -137,13 +141,15 @@ class WarpBatch(Capabilities):
         contact_checks: int | None = None,
         nconmax: int | None = None,
         njmax: int | None = None,
+        physics_version: int = 1,
     ) -> None:
+        self._build = model_builder(physics_version)
         wp, mjw = _import_warp()
         self._wp, self._mjw = wp, mjw
         self.device = _device(wp, device)
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         self.socket = socket
-        self.model = compile_model(socket)
+        self.model = self._build(socket)
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         self.layout = model_layout(self.model)
         self.n_pins = self.layout.n_pins
@@ -177,7 +183,7 @@ class WarpBatch(Capabilities):
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
             return
-        model = compile_model(socket)
+        model = self._build(socket)
         shared = _model_arrays(self.model) - set(self.per_world_fields) - {"bvh_aabb", "dof_length"}
         other = [
             n for n in _differing_fields(self.model, model, shared) if not n.startswith("name")

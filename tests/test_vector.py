@@ -243,3 +243,18 @@ def test_batched_infos_are_gymnasiums_add_info_exactly() -> None:
                 assert np.array_equal(np.asarray(x), np.asarray(y))
 
     same(batch_infos(infos, 4), expected)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "task"),
+    [
+        ("tolins/Circle2x2-v2", {"fault_at": 40}),
+        ("tolins/Circle2x1Defective-v2", {"randomization": "default"}),
+    ],
+)
+def test_v2_vector_env_is_the_single_env_bit_for_bit(env_id, task, tmp_path, monkeypatch) -> None:
+    # Simulations in free flight and in contact step side by side on different step lengths
+    # (and, randomised, on models of their own): each is still the single env's.
+    monkeypatch.chdir(tmp_path)
+    seen = _compare(env_id, "mujoco", 3, 80, 2, **task)
+    assert seen["success"] >= 2 and seen["fault"] == ("fault_at" in task)

@@ -52,7 +52,7 @@ def _spec(args: argparse.Namespace) -> SocketSpec:
     from tolins.geometry.spec_json import spec_from_json
 
     if args.env is not None:
-        return next(task.socket for task in tasks.PRESETS if task.gym_id == args.env)
+        return tasks.task_of(args.env).socket
     if args.socket.lstrip().startswith("{"):
         return spec_from_json(args.socket)
     if Path(args.socket).is_file():

@@ -142,8 +142,21 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     as gymnasium's ``OrderEnforcing`` does. A keyword the env does not take raises
     ``ValueError`` naming it and the allowed ones.
 
+    **Physics version** (``physics_version``, the ids' ``-v1`` and ``-v2``;
+    :mod:`tolins.physics.versions`): 1, the default of the generic constructor, or 2.
+
     Version history:
 
+    * v2 (tolins 0.5.0): faster MuJoCo physics, the same task. The board's pieces sit in
+      the world body, and a control step in which no part of the workpiece can reach the
+      board or a joint limit (from the pose, the commanded velocity and the servos'
+      overshoot, :mod:`tolins.physics.free_flight`) runs on 5 ms physics steps instead of
+      the grade's contact step. The pose at every control step's end stays within 0.1 µm
+      of v1's (measured over expert, random and π_n episodes on every paper preset, the
+      grades, each defect kind and randomised physics: ``benchmarks/v2_equivalence.py``),
+      so success, steps, collisions and rewards are v1's; what it may move is a contact
+      decided at exactly the capture boundary, and the digits of forces and poses below
+      that bound. The kinematic backend is the same in both.
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
       ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
       the carrier collides with the board's top; reset poses and goals are validated;

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -135,6 +136,20 @@ def env_ids(*, generic: bool = True) -> tuple[str, ...]:
         if generic:
             ids.append(GENERIC_IDS[version])
     return tuple(ids)
+
+
+def task_of(env_id: str) -> Task:
+    """The preset task of a tolins id of any physics version; ``ValueError`` otherwise."""
+    name, _, version = env_id.removeprefix("tolins/").rpartition("-v")
+    for task in PRESETS:
+        if task.name == name and version.isdigit() and int(version) in VERSIONS:
+            return task
+    raise ValueError(f"{env_id!r} is not a preset id; allowed: {', '.join(env_ids(generic=False))}")
+
+
+def env_label(env_id: str) -> str:
+    """``env_id`` without ``tolins/`` and its version, e.g. ``Circle2x2`` (for tables)."""
+    return re.sub(r"-v\d+$", "", env_id.removeprefix("tolins/"))
 
 
 def check_env_id(env_id: str) -> str:

@@ -86,10 +86,10 @@ def evaluate_conditions(
     was trained for (what a graded hole or a defect changes, it meets by contact)."""
     entry: Any = policy.agent
     if policy_path is not None:
-        from tolins.envs.tasks import TASKS
+        from tolins.envs.tasks import task_of
         from tolins.learning.agents.actors import PolicyRef, make_actor
 
-        socket = next(t.socket for t in TASKS if t.gym_id == CIRCLE_2X2)
+        socket = task_of(CIRCLE_2X2).socket
         entry = make_actor(PolicyRef(policy.agent, policy_path), socket)
     return {
         c.id: evaluate(

@@ -12,7 +12,7 @@ from tolins.bench.reports import plots
 from tolins.bench.reports.force_plot import plot_row_profiles
 from tolins.bench.table.baselines import env_step_curves, read_curves
 from tolins.bench.table.rows import PAPER, ROWS, TRAININGS
-from tolins.envs.tasks import TASKS
+from tolins.envs.tasks import TASKS, task_of
 
 if TYPE_CHECKING:
     from tolins.bench.pipeline.config import BenchRun
@@ -36,7 +36,8 @@ def write_figures(run: BenchRun, out: Path) -> list[Path]:
         if row.id in results:
             env_ids += [*(t for tr in row.trainings for t in tr.env_ids), row.eval_env]
     written += plot_row_profiles({row: seeds[0] for row, seeds in run.episodes.items()}, out)
-    sockets = {t.name: t.socket for t in TASKS if t.gym_id in env_ids}
+    used = {task_of(env_id).name for env_id in env_ids}
+    sockets = {t.name: t.socket for t in TASKS if t.name in used}
     written.append(plots.plot_tolerance_images(out / "tolerance_images.png", sockets))
     for check in run.claims:
         path = out / "claims" / f"{check.claim.name}.png"

@@ -12,6 +12,7 @@ from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
 from tolins.bench.table.rows import PAPER
 from tolins.bench.table.seeds import FIRST_SEED
 from tolins.bench.table.statistics import one_seed_margin
+from tolins.envs.tasks import env_label
 
 if TYPE_CHECKING:
     from tolins.bench.pipeline.config import BenchRun
@@ -43,7 +44,7 @@ def format_results_table(results: dict[str, dict[str, Any]]) -> str:
         rule += "---|" * (2 + extra.count("|"))
     lines = [header, rule]
     for row_id, entry in results.items():
-        cells = [row_id, entry["policy"], entry["train_env"], _short(entry["eval_env"])]
+        cells = [row_id, entry["policy"], entry["train_env"], env_label(entry["eval_env"])]
         for name, digits in _FIGURES:
             cells.append(_pm(entry[f"{name}_mean"], entry[f"{name}_std"], digits))
             if name in _WITH_CI:
@@ -82,7 +83,7 @@ def format_backends(
     for row_id, entry in physics.items():
         if row_id not in kinematic:
             continue
-        cells = [row_id, entry["policy"], _short(entry["eval_env"])]
+        cells = [row_id, entry["policy"], env_label(entry["eval_env"])]
         for name, digits in _FIGURES:
             before, after = kinematic[row_id][f"{name}_mean"], entry[f"{name}_mean"]
             cells.append(f"{before:.{digits}f} → {after:.{digits}f} ({after - before:+.{digits}f})")
@@ -183,10 +184,6 @@ def _interval_note(seeds: int) -> str:
         "[CI]: the 95 % bootstrap CI over the episodes of the one training seed (training "
         "variance not measured); IQM: over those episodes."
     )
-
-
-def _short(env_id: str) -> str:
-    return env_id.removeprefix("tolins/").removesuffix("-v1")
 
 
 def _command(config) -> str:

@@ -36,6 +36,7 @@ from tolins.bench.table.statistics import (
     sign,
     unit_samples,
 )
+from tolins.envs.tasks import env_label
 
 CONSISTENT, A_HIGHER, B_HIGHER = "consistent", "differs: A higher", "differs: B higher"
 NOT_COMPARABLE = "not comparable"
@@ -180,7 +181,7 @@ def format_comparison(result: Comparison) -> str:
         cells = [
             row.row,
             str(a.get("policy", "")),
-            str(a.get("eval_env", "")).removeprefix("tolins/").removesuffix("-v1"),
+            env_label(str(a.get("eval_env", ""))),
             f"{a['reward_mean']:.2f}",
             f"{b['reward_mean']:.2f}",
             d.format(signed=True),

@@ -4,7 +4,7 @@ its cells.
 The 2*2 circle socket's policies (:data:`POLICIES`: the safe and efficient experts, π_n,
 π_φ and π_φ*) under conditions the paper never tried (:data:`CONDITIONS`): the tolerance
 grades (radial clearance 200 µm, the paper's, then 100, 50 and 20 µm:
-``tolins/Circle2x2Fit{um}-v1``), each defect kind of :mod:`tolins.geometry.defects` at the
+``tolins/Circle2x2Fit{um}-v2``), each defect kind of :mod:`tolins.geometry.defects` at the
 200 µm fit (``defects=``, drawn every episode), and randomised physics
 (``randomization="default"``, :data:`tolins.physics.randomization.DEFAULT_RANDOMIZATION`).
 
@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from tolins.bench.table.results import row_entry
-from tolins.bench.table.rows import CIRCLE_2X2, Row
+from tolins.bench.table.rows import CIRCLE_2X2, Row, bench_id
 from tolins.envs.tasks import DEFECT_SIGMA
 from tolins.geometry.specs import GRADES_UM
 from tolins.physics.registry import simulator
@@ -80,7 +80,7 @@ class Condition:
 
 
 def _grade_env(um: int) -> str:
-    return CIRCLE_2X2 if um == GRADES_UM[0] else f"tolins/Circle2x2Fit{um}-v1"
+    return CIRCLE_2X2 if um == GRADES_UM[0] else bench_id(f"Circle2x2Fit{um}")
 
 
 #: The conditions, in the table's column order.

@@ -4,13 +4,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-CIRCLE_2X1_DEFECTIVE = "tolins/Circle2x1Defective-v1"
-CIRCLE_2X2 = "tolins/Circle2x2-v1"
-CIRCLE_2X4 = "tolins/Circle2x4-v1"
-CIRCLE_2X8 = "tolins/Circle2x8-v1"
-SQUARE = "tolins/Square-v1"
-PENTAGON = "tolins/Pentagon-v1"
-HEXAGON = "tolins/Hexagon-v1"
+#: The physics version every row trains and is evaluated on (the ids' ``-v2``).
+PHYSICS_VERSION = 1
+
+
+def bench_id(name: str) -> str:
+    """The id of the preset ``name`` in the bench's physics version."""
+    return f"tolins/{name}-v{PHYSICS_VERSION}"
+
+
+CIRCLE_2X1_DEFECTIVE = bench_id("Circle2x1Defective")
+CIRCLE_2X2 = bench_id("Circle2x2")
+CIRCLE_2X4 = bench_id("Circle2x4")
+CIRCLE_2X8 = bench_id("Circle2x8")
+SQUARE = bench_id("Square")
+PENTAGON = bench_id("Pentagon")
+HEXAGON = bench_id("Hexagon")
 
 
 @dataclass(frozen=True)

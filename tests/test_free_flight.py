@@ -46,11 +46,27 @@ def test_the_bound_decides_the_step_at_its_edge(outside) -> None:
         assert stepper.step_factor == 1
 
 
+def test_a_pin_centred_in_its_hole_descends_in_free_flight() -> None:
+    backend = MujocoBackend(SOCKET, 0.25, physics_version=2)
+    backend.reset(np.array([0.0, 0.0, 0.0, -0.5]))  # tips 0.5 mm deep, centred
+    backend.step(np.array([0.0, 0.0, 0.0, -2.5]))
+    assert backend.stepper.step_factor > 1
+    # 0.1 mm sideways stays inside the 0.2 mm clearance; 0.25 mm could touch a wall.
+    for speed, free in ((0.4, True), (1.0, False)):
+        backend.reset(np.array([0.0, 0.0, 0.0, -0.5]))
+        backend.step(np.array([speed, 0.0, 0.0, -2.5]))
+        assert (backend.stepper.step_factor > 1) == free
+
+
 def test_limits_of_a_model() -> None:
     limits = servo_limits(compile_model(SOCKET, physics_version=2))
     assert limits.lowest == pytest.approx(0.0, abs=1e-12)  # the tips are the pose's z
     assert limits.board_top == pytest.approx(0.0, abs=1e-12)
     assert np.allclose(1 / limits.omega[:3], 2.35e-3, rtol=0.01)  # the servos' 2.35 ms
+    assert np.allclose(limits.hole_radius, SOCKET.hole_radius, atol=1e-6)
+    assert np.allclose(limits.hole_xy, SOCKET.hole_centers) and np.all(limits.pin_radius == 0.3)
+    plugged = servo_limits(compile_model(CircularSocket(rows=2, cols=2, blocked_holes=(1,))))
+    assert plugged.hole_radius[1] == -np.inf  # a pin over a plug is never free
     short = compile_model(CircularSocket(rows=2, cols=2, pin_shortenings=(0.1,) * 4))
     assert servo_limits(short).lowest == pytest.approx(-0.1, abs=1e-9)
 

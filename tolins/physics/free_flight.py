@@ -11,10 +11,12 @@ per simulation, at the start of the control step, from numbers alone:
 moving at ``v0``: the commanded travel plus the overshoot of a critically damped servo
 whose set-point is reset while it moves, ``tau = 1 / omega`` with ``omega = sqrt(kp / M)``
 (2.35 ms at the nominal gains; measured at most 2.03 ms on the contact step and 0.95 ms on
-a 5 ms one, ``benchmarks/v2_equivalence.py``). Everything a pin can touch lies at or below
-the board's top, so the step is free when the workpiece's lowest point stays
-:data:`CLEARANCE` above it after the downward reach, and every joint stays
-:data:`CLEARANCE` inside its range (MuJoCo's joint limits are constraints as contacts are).
+a 5 ms one). Everything a pin can touch lies at or below the board's top or outside the
+circle within its hole's walls, so the step is free when every joint stays
+:data:`CLEARANCE` inside its range (MuJoCo's joint limits are constraints as contacts are)
+and either the workpiece's lowest point stays :data:`CLEARANCE` above the board's top after
+the downward reach, or every pin stays :data:`CLEARANCE` inside that circle after its
+sideways reach (``|x| + |y|`` travel plus the hinge's arc) with the carrier above the board.
 
 **The step.** In free flight each joint is a linear servo, integrated by ``implicitfast``
 with its damping implicit: a step ``h`` ends every contact-read chunk at the state of the
@@ -78,6 +80,13 @@ class ServoLimits:
         lowest: The workpiece's lowest point below its pose's ``z`` (mm; 0 for pins of
             full length, less for shortened ones).
         board_top: The highest point of everything else (mm; the board's top, 0).
+        rest_lowest: The lowest point of the workpiece but its pins, below its pose's ``z``
+            (mm; -4, the carrier over pins 4 mm long).
+        pin_xy: ``(pins, 2)`` each pin's axis in the workpiece's frame (mm).
+        pin_radius: Each pin's radius about its axis (mm; its bounding circle).
+        hole_xy: ``(pins, 2)`` the centre of each pin's hole (mm).
+        hole_radius: The radius of the circle inside each hole's walls (mm); ``-inf`` where
+            that cannot be told (a plugged hole, a hole of other walls than a circle's).
 
     Of one model, the joints' fields are ``(4,)`` and the others scalars; of a batch
     (:meth:`stack`), ``(n, 4)`` and ``(n,)``.
@@ -91,6 +100,11 @@ class ServoLimits:
     high: np.ndarray
     lowest: np.ndarray
     board_top: np.ndarray
+    rest_lowest: np.ndarray
+    pin_xy: np.ndarray
+    pin_radius: np.ndarray
+    hole_xy: np.ndarray
+    hole_radius: np.ndarray
 
     @classmethod
     def stack(cls, limits: list[ServoLimits]) -> ServoLimits:
@@ -129,6 +143,10 @@ def servo_limits(model: mujoco.MjModel) -> ServoLimits:
         model.geom_bodyid, [b for b in range(model.nbody) if _under(model, b, workpiece)]
     )
     extents = _top_and_bottom(data, np.arange(model.ngeom), model)
+    pins = np.array(layout.pin_geoms)
+    rest = moving.copy()
+    rest[pins] = False
+    hole_xy, hole_radius = _holes(model, data, len(pins))
     return ServoLimits(
         timestep=np.float64(model.opt.timestep),
         kv=-model.actuator_biasprm[:, 2].copy(),
@@ -138,7 +156,48 @@ def servo_limits(model: mujoco.MjModel) -> ServoLimits:
         high=model.jnt_range[:, 1].copy(),
         lowest=np.float64(data.qpos[z] - extents[moving, 0].min()),
         board_top=np.float64(extents[~moving, 1].max()),
+        rest_lowest=np.float64(data.qpos[z] - extents[rest, 0].min()),
+        pin_xy=data.geom_xpos[pins, :2].copy(),
+        pin_radius=np.array([_axial_radius(model, g) for g in pins]),
+        hole_xy=hole_xy,
+        hole_radius=hole_radius,
     )
+
+
+def _axial_radius(model: mujoco.MjModel, geom: int) -> float:
+    """The radius of a pin about its axis: a cylinder's, else its bounding box's corner."""
+    if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        return float(model.geom_size[geom, 0])
+    centre, half = model.geom_aabb[geom, :2], model.geom_aabb[geom, 3:5]
+    return float(np.hypot(*(np.abs(centre) + half)))
+
+
+def _holes(model: mujoco.MjModel, data: mujoco.MjData, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each hole's centre and the radius of the circle inside its walls: for walls of a
+    regular polygon in a square cell (a circle's 16-gon), the centre of their vertices and
+    the nearest vertex's distance times ``cos(pi / sides)`` (the faces' distance)."""
+    centres, radii = np.zeros((n, 2)), np.full(n, -np.inf)
+    names = [model.geom(g).name for g in range(model.ngeom)]
+    for h in range(n):
+        walls = [g for g, name in enumerate(names) if name.startswith(f"hole{h}_wall")]
+        points = [_mesh_points(model, data, g) for g in walls]
+        if not points:
+            continue
+        vertices = np.concatenate(points)
+        centres[h] = vertices.mean(axis=0)
+        if len(walls) % 4 == 0 and f"plug{h}" not in names:
+            nearest = np.linalg.norm(vertices - centres[h], axis=1).min()
+            radii[h] = nearest * math.cos(math.pi / len(walls))
+    return centres, radii
+
+
+def _mesh_points(model: mujoco.MjModel, data: mujoco.MjData, geom: int) -> np.ndarray:
+    """World ``(x, y)`` of the vertices of a mesh geom."""
+    mesh = model.geom_dataid[geom]
+    start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
+    local = model.mesh_vert[start : start + count]
+    world = data.geom_xpos[geom] + local @ data.geom_xmat[geom].reshape(3, 3).T
+    return world[:, :2]
 
 
 def _under(model: mujoco.MjModel, body: int, root: int) -> bool:
@@ -207,9 +266,13 @@ def free_flight_plan(
     reach = command * control_time + speed / lim.omega
     down = np.maximum(-ctrl[:, z], 0.0) * control_time
     down += np.maximum(-qvel[:, z], 0.0) / lim.omega[:, z]
-    clear = (qpos[:, z] - lim.lowest - down - lim.board_top > CLEARANCE) & np.all(
+    height = qpos[:, z] - down - lim.board_top
+    in_range = np.all(
         (qpos - reach - lim.low > CLEARANCE) & (lim.high - qpos - reach > CLEARANCE), axis=1
     )
+    above = height - lim.lowest > CLEARANCE
+    inside = _inside_holes(lim, qpos, reach) & (height - lim.rest_lowest > CLEARANCE)
+    clear = in_range & (above | inside)
     pushed = SATURATION_FACTOR * lim.kv * (speed + command) / lim.force_limit
     slowest, fastest = lim.omega.min(axis=1), lim.omega.max(axis=1)
     open_ = clear.copy()
@@ -224,6 +287,19 @@ def free_flight_plan(
         window[take], factor[take] = option.window, option.factor
         open_ &= ~take
     return window, factor
+
+
+def _inside_holes(lim: ServoLimits, qpos: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Whether every pin stays inside the circle within its hole's walls, whatever its height
+    (a pin there touches nothing: the board's top and walls lie outside that circle)."""
+    theta = qpos[:, 3]
+    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    px, py = lim.pin_xy[..., 0], lim.pin_xy[..., 1]
+    x = c * px - s * py + qpos[:, :1]
+    y = s * px + c * py + qpos[:, 1:2]
+    off_centre = np.hypot(x - lim.hole_xy[..., 0], y - lim.hole_xy[..., 1])
+    sway = reach[:, :1] + reach[:, 1:2] + reach[:, 3:4] * np.hypot(px, py)
+    return np.all(off_centre + lim.pin_radius + sway < lim.hole_radius - CLEARANCE, axis=1)
 
 
 def _force_after(x: np.ndarray) -> np.ndarray:

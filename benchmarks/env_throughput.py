@@ -524,7 +524,16 @@ def main(argv: list[str] | None = None) -> int:
         help="only the single env on this tree against revision REV, side by side "
         "(benchmarks/env_versions.py)",
     )
+    parser.add_argument(
+        "--versions",
+        action="store_true",
+        help="only -v1 against -v2, side by side (benchmarks/physics_versions.py)",
+    )
     args = parser.parse_args(argv)
+    if args.versions:
+        import physics_versions  # beside this script
+
+        return physics_versions.main([])
     if args.against:
         import env_versions  # beside this script
 

@@ -8,6 +8,8 @@ module                    what it holds
 ``schedule``              the control period: allowed values, physics steps, contact reads
 ``servo``                 the MuJoCo control step (``ServoStepper``), shared by every MuJoCo
                           stepper and by dm_control
+``free_flight``           where nothing can touch: the longer physics step of ``-v2``
+``versions``              the physics versions of the ``-v1`` and ``-v2`` ids
 ``compiled``              models compiled from sockets, cached by spec (``SocketCache``)
 ``mujoco``                ``MujocoBackend`` (single env) and ``MujocoBatch`` (``mujoco.batch``)
 ``kinematic``             the paper's simulator: ``KinematicBatch`` and its batch of one

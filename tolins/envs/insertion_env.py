@@ -151,7 +151,8 @@ class InsertionEnv(gym.Env, SettingsAttributes):
       the world body, and a control step in which no part of the workpiece can reach the
       board or a joint limit (from the pose, the commanded velocity and the servos'
       overshoot, :mod:`tolins.physics.free_flight`) runs on 5 ms physics steps instead of
-      the grade's contact step. The pose at every control step's end stays within 0.1 µm
+      the 1 ms contact step (the finer grades, whose jams turn on the state's last bits,
+      keep their contact step). The pose at every control step's end stays within 0.1 µm
       of v1's (measured over expert, random and π_n episodes on every paper preset, the
       grades, each defect kind and randomised physics: ``benchmarks/v2_equivalence.py``),
       so success, steps, collisions and rewards are v1's; what it may move is a contact

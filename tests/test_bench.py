@@ -75,7 +75,7 @@ def test_table_has_the_papers_15_rows_and_their_trainings():
     assert by_id["C4.2"].inference and by_id["C4.2"].agent == by_id["C4.1"].agent
     assert by_id["C3.1"].agent == by_id["C2.3"].agent  # the paper: the same policy
     assert by_id["C1.1"].trainings == []
-    assert TRAININGS["pi_phi_polygon"].env_ids == ("tolins/Square-v1", "tolins/Hexagon-v1")
+    assert TRAININGS["pi_phi_polygon"].env_ids == ("tolins/Square-v2", "tolins/Hexagon-v2")
 
 
 def test_bad_rows_profiles_backends_and_seeds_are_refused():

@@ -37,8 +37,8 @@ def test_conditions_are_the_grades_the_defect_kinds_and_random_physics():
         "physics",
     ]
     assert [c.clearance_um for c in CONDITIONS[:4]] == [200, 100, 50, 20]
-    assert CONDITIONS[0].env_id == "tolins/Circle2x2-v1"
-    assert CONDITIONS[2].env_id == "tolins/Circle2x2Fit50-v1"
+    assert CONDITIONS[0].env_id == "tolins/Circle2x2-v2"
+    assert CONDITIONS[2].env_id == "tolins/Circle2x2Fit50-v2"
     assert CONDITIONS[8].env_kwargs == {"defects": ("blocked", None)}
     assert not CONDITIONS[8].vectorizable("mujoco") and CONDITIONS[8].vectorizable("kinematic")
     assert [p.label for p in POLICIES] == ["π_e^safe", "π_e^eff", "π_n", "π_φ", "π_φ*"]

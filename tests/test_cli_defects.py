@@ -16,7 +16,7 @@ import pytest
 import tolins
 from tolins.bench.reference import reference_path
 from tolins.cli import build_parser, main
-from tolins.envs.tasks import GENERIC_ID, GRADE_TASKS, env_ids
+from tolins.envs.tasks import GENERIC_ID, GENERIC_IDS, GRADE_TASKS, env_ids
 
 ENV = "tolins/Circle2x2-v1"
 GRADE = "tolins/Circle2x2Fit20-v1"
@@ -149,7 +149,7 @@ def test_the_task_table_lists_every_registered_id_and_one_check_serves_all():
 
     registered = {i for i in gym.registry if i.startswith("tolins/")}
     assert set(env_ids()) == registered
-    assert env_ids(generic=False) == tuple(i for i in env_ids() if i != GENERIC_ID)
+    assert env_ids(generic=False) == tuple(i for i in env_ids() if i not in GENERIC_IDS.values())
     assert episodes.check_env_id is tolins.envs.tasks.check_env_id
     with pytest.raises(ValueError, match=f"unknown env 'tolins/Nope-v1'; allowed: .*{GRADE}"):
         tolins.envs.tasks.check_env_id("tolins/Nope-v1")

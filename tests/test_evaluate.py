@@ -26,7 +26,7 @@ from tolins.learning.imitation.policy import Policy, PolicyArchitecture, save_po
 from tolins.paper import A_MAX
 from tolins.policies.experts import SafeExpert
 
-CIRCLE = "tolins/Circle2x2-v1"
+CIRCLE = "tolins/Circle2x2-v2"
 EPISODES = 4
 #: Fields that name a row rather than measure it.
 LABELS = ("policy", "train_env")
@@ -143,13 +143,13 @@ def test_evaluate_writes_the_results_schema_and_shows_reference_rows(
     argv += ["--episodes", str(EPISODES), "--out", str(out), "--reference", str(bench_like)]
     assert main(argv) == 0
     printed = capsys.readouterr().out
-    assert "| safe | safe | Circle2x2-v1 |" in printed and "| C2.1 | π_e^safe |" in printed
+    assert "| safe | safe | Circle2x2-v2 |" in printed and "| C2.1 | π_e^safe |" in printed
     document = read_results(out)
     assert document["schema"] == SCHEMA and document["source"] == "evaluate"
     assert document["backend"] == "kinematic" and document["first_eval_seed"] == 10_000
     assert _figures(document["rows"]["safe"]) == _figures(_bench_row("C2.1"))
     assert main(argv[:-2]) == 0  # no --reference: the paper's rows of the same eval env
-    assert "| C2.3 | π_n | Circle2x2-v1 | 20.58 ± 0.71 |" in capsys.readouterr().out
+    assert "| C2.3 | π_n | Circle2x2-v2 | 20.58 ± 0.71 |" in capsys.readouterr().out
 
 
 def test_read_results_takes_the_old_layout_and_refuses_others(tmp_path) -> None:
@@ -211,7 +211,7 @@ def test_shipped_references_are_shown_by_default_and_named_with_reference(
     printed = capsys.readouterr().out
     assert "from reference:quick (shipped, kinematic)" in printed and "| 12.34 ± " in printed
     assert main([*argv, "--backend", "kinematic", "--reference", "reference:quick"]) == 0
-    assert "| C2.1 | π_e^safe | Circle2x2-v1 | 12.34 ± " in capsys.readouterr().out
+    assert "| C2.1 | π_e^safe | Circle2x2-v2 | 12.34 ± " in capsys.readouterr().out
     assert main([*argv, "--backend", "kinematic", "--reference", "reference:nope"]) == 2
     error = capsys.readouterr().err
     assert "reference:nope: no such reference results" in error and error.count("\n") == 1
@@ -222,7 +222,7 @@ def test_a_named_evaluation_lines_up_with_a_bench_row_in_compare(tmp_path, capsy
     for policy in ("safe", "efficient"):
         out = str(tmp_path / policy)
         assert main([*argv, "--policy", policy, "--name", "C2.1", "--out", out]) == 0
-    assert "| C2.1 | efficient | Circle2x2-v1 |" in capsys.readouterr().out
+    assert "| C2.1 | efficient | Circle2x2-v2 |" in capsys.readouterr().out
     assert read_results(tmp_path / "safe")["rows"]["C2.1"]["policy"] == "safe"
     assert main(["compare", str(tmp_path / "safe"), str(tmp_path / "efficient")]) == 0
     assert "| C2.1 |" in capsys.readouterr().out

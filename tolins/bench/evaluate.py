@@ -16,7 +16,7 @@ from tolins.bench.jobs.policy_episodes import evaluate
 from tolins.bench.table.results import read_results, results_document, row_entry
 from tolins.bench.table.rows import PAPER, ROWS, Row
 from tolins.bench.table.seeds import eval_seeds
-from tolins.envs.tasks import env_ids
+from tolins.envs.tasks import env_ids, env_label
 from tolins.physics import BACKENDS
 
 #: Episodes of a row in every bench profile but ``tiny``.
@@ -87,6 +87,11 @@ def write_evaluation(out: str | Path, name: str, entry: dict[str, Any], *, backe
     return atomic_json(Path(out) / "results.json", document)
 
 
+def _same_env(a: object, b: str) -> bool:
+    """Whether ``a`` names ``b``'s workpiece in any physics version (their outcomes agree)."""
+    return isinstance(a, str) and env_label(a) == env_label(b)
+
+
 def reference_rows(
     env_id: str, reference: str | Path | None = None, *, backend: str = "mujoco"
 ) -> tuple[str, dict[str, dict[str, Any]]]:
@@ -100,16 +105,16 @@ def reference_rows(
         text = str(reference)
         path = reference_path(text[len(PREFIX) :]) if text.startswith(PREFIX) else reference
         document = read_results(path)
-        rows = {k: v for k, v in document["rows"].items() if v.get("eval_env") == env_id}
+        rows = {k: v for k, v in document["rows"].items() if _same_env(v.get("eval_env"), env_id)}
         return f"{text} ({document.get('backend') or 'unknown backend'})", rows
     for name in reference_names():
         document = read_results(reference_path(name))
-        rows = {k: v for k, v in document["rows"].items() if v.get("eval_env") == env_id}
+        rows = {k: v for k, v in document["rows"].items() if _same_env(v.get("eval_env"), env_id)}
         if rows and document.get("backend") == backend:
             return f"{PREFIX}{name} (shipped, {backend})", rows
     rows = {}
     for row in ROWS:
-        if row.eval_env == env_id:
+        if _same_env(row.eval_env, env_id):
             figures = PAPER[row.id]
             rows[row.id] = {
                 "policy": row.policy,

@@ -128,7 +128,7 @@ def preset_env_ids(*, several: bool = False) -> Callable[[str], str]:
     no option."""
     from tolins.envs import tasks
 
-    reasons = {tasks.GENERIC_ID: "it needs socket=, which no option sets"}
+    reasons = dict.fromkeys(tasks.GENERIC_IDS.values(), "it needs socket=, which no option sets")
     return env_ids(tasks.env_ids(generic=False), several=several, reasons=reasons)
 
 

@@ -23,7 +23,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "--env",
         type=checks.env_ids(
             tasks.env_ids(generic=False),
-            reasons={tasks.GENERIC_ID: "its workpiece is given with --socket"},
+            reasons=dict.fromkeys(
+                tasks.GENERIC_IDS.values(), "its workpiece is given with --socket"
+            ),
         ),
         help="a preset env id: its nominal workpiece, e.g. tolins/Circle2x2-v1",
     )

@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from tolins.bench.store.cache import Stage, StageCache
+from tolins.envs.tasks import env_label
 
 #: The Minari id, and folder, of the dataset inside a demonstration stage.
 DATASET = "demonstrations-v0"
@@ -45,8 +46,7 @@ class DemoSpec:
     @property
     def name(self) -> str:
         """The stage name, e.g. ``demos-Circle2x2-safe-seed0-0``."""
-        env = self.env_id.rpartition("/")[2].removesuffix("-v1")
-        return f"demos-{env}-{self.expert}-seed{self.seed}-{self.stream}"
+        return f"demos-{env_label(self.env_id)}-{self.expert}-seed{self.seed}-{self.stream}"
 
 
 def demo_stage(spec: DemoSpec) -> Stage[DemoSpec]:

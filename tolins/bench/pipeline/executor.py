@@ -6,9 +6,9 @@ results it takes as its last arguments. Both executors call the same functions w
 same arguments and return the results by job name in the jobs' order; they differ only
 in where and when each job runs:
 
-- local: the jobs in their order, each run of consecutive ``side_by_side`` jobs (the
-  evaluations) on a pool of ``workers`` threads with torch on one thread; RS-GAIL's
-  candidates on its own thread pool.
+- local: every job on a pool of ``workers`` threads as soon as its dependencies are done,
+  the one with the costliest chain of work behind it first (:func:`critical_paths`), torch
+  on one thread; RS-GAIL's candidates on each training's own thread pool.
 - Ray: every job as a task (1 CPU) as soon as its dependencies are done; torch on one
   thread in ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as
   locally: torch's results can depend on its thread count); RS-GAIL's candidates on one
@@ -22,13 +22,14 @@ atomically, the marker last (:mod:`tolins.bench.store.cache`).
 
 from __future__ import annotations
 
+import heapq
 import os
 import re
 import socket
 import sys
 import threading
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -46,7 +47,8 @@ class Job:
         fn: A module-level function (Ray pickles it by reference).
         args: Its first arguments (picklable).
         deps: Names of earlier jobs whose results are its last arguments.
-        side_by_side: May run beside other such jobs on threads (torch on one thread).
+        side_by_side: An evaluation: on Ray, its task runs torch on one thread (a
+            training's on the driver's count); locally every job runs torch on one thread.
     """
 
     name: str
@@ -61,7 +63,15 @@ DoneCallback = Callable[[Job, Any], None] | None
 
 
 class LocalExecutor:
-    """Jobs in their order in this process; runs of ``side_by_side`` jobs on threads."""
+    """Jobs on ``workers`` threads of this process, each as soon as its dependencies are done,
+    the ready job with the longest chain of work behind it first.
+
+    ``costs`` (seconds, by job name; :func:`~tolins.bench.pipeline.progress.expected_cost`)
+    order the ready jobs: a job's priority is its own cost plus that of the costliest chain
+    of jobs that need it (critical path first), ties in list order. Torch runs on one thread
+    throughout (every training and evaluation asks for that, and one setting for the whole
+    run keeps it so while jobs overlap), so results do not depend on the order.
+    """
 
     name = "local"
 
@@ -74,11 +84,26 @@ class LocalExecutor:
         return None
 
     def run(
-        self, jobs: Sequence[Job], *, on_start: Callback = None, on_done: DoneCallback = None
+        self,
+        jobs: Sequence[Job],
+        *,
+        on_start: Callback = None,
+        on_done: DoneCallback = None,
+        costs: Mapping[str, float] | None = None,
     ) -> dict[str, Any]:
         from tolins.learning.artefacts import single_threaded_torch
 
         results: dict[str, Any] = {}
+        priority = critical_paths(jobs, costs or {})
+        order = {job.name: i for i, job in enumerate(jobs)}
+        waiting = {job.name: set(job.deps) & set(order) for job in jobs}
+        needed_by: dict[str, list[str]] = {job.name: [] for job in jobs}
+        for job in jobs:
+            for dep in waiting[job.name]:
+                needed_by[dep].append(job.name)
+        by_name = {job.name: job for job in jobs}
+        ready = [(-priority[n], order[n], n) for n, deps in waiting.items() if not deps]
+        heapq.heapify(ready)
 
         def call(job: Job) -> Any:
             if on_start:
@@ -89,23 +114,45 @@ class LocalExecutor:
                 on_done(job, value)
             return value
 
-        start = 0
-        while start < len(jobs):
-            end = start + 1
-            if jobs[start].side_by_side:
-                while end < len(jobs) and jobs[end].side_by_side:
-                    end += 1
-                batch = jobs[start:end]
-                with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
-                    values = list(pool.map(call, batch))
-                results.update((job.name, value) for job, value in zip(batch, values, strict=True))
-            else:
-                results[jobs[start].name] = call(jobs[start])
-            start = end
+        with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
+            running: dict[Future, str] = {}
+            while ready or running:
+                while ready and len(running) < self.workers:
+                    name = heapq.heappop(ready)[2]
+                    running[pool.submit(call, by_name[name])] = name
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                for future in done:
+                    name = running.pop(future)
+                    error = future.exception()
+                    if error is not None:
+                        for other in running:  # let the running ones end, start no more
+                            other.cancel()
+                        wait(running)
+                        raise error
+                    results[name] = future.result()
+                    for later in needed_by[name]:
+                        waiting[later].discard(name)
+                        if not waiting[later]:
+                            heapq.heappush(ready, (-priority[later], order[later], later))
         return {job.name: results[job.name] for job in jobs}
 
     def close(self) -> None:
         """Nothing to release."""
+
+
+def critical_paths(jobs: Sequence[Job], costs: Mapping[str, float]) -> dict[str, float]:
+    """Each job's cost plus the costliest chain of jobs that need it (a job missing from
+    ``costs`` costs 1)."""
+    needed_by: dict[str, list[str]] = {job.name: [] for job in jobs}
+    for job in jobs:
+        for dep in job.deps:
+            if dep in needed_by:
+                needed_by[dep].append(job.name)
+    path: dict[str, float] = {}
+    for job in reversed(jobs):  # a job's dependencies come before it in the list
+        after = max((path[n] for n in needed_by[job.name]), default=0.0)
+        path[job.name] = costs.get(job.name, 1.0) + after
+    return path
 
 
 def check_address(address: str | None) -> None:
@@ -166,8 +213,14 @@ class RayExecutor:
         return self._pool
 
     def run(
-        self, jobs: Sequence[Job], *, on_start: Callback = None, on_done: DoneCallback = None
+        self,
+        jobs: Sequence[Job],
+        *,
+        on_start: Callback = None,
+        on_done: DoneCallback = None,
+        costs: Mapping[str, float] | None = None,
     ) -> dict[str, Any]:
+        """As :meth:`LocalExecutor.run`; Ray schedules the tasks (``costs`` unused)."""
         ray = self._ray
         task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
         values, where = {}, {}

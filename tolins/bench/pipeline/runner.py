@@ -73,13 +73,15 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         if any(demonstrations(t, profile, backend, 0) for row in rows for t in row.trainings):
             require_minari("tolins bench (its demonstrations are Minari datasets)")
         pool = executor.candidate_pool()
-        plan_trainings(plan, rows, seeds, profile, backend, pool, progress and local, log)
+        # Trainings run side by side: their own progress bars would interleave.
+        inner_bars = progress and local and config.workers == 1
+        plan_trainings(plan, rows, seeds, profile, backend, pool, inner_bars, log)
         plan_evaluations(plan, rows, seeds, profile, backend)
         if config.robustness:
             plan_robustness(plan, seeds, profile, backend)
         if config.study:
             workers = 2 if local else 1  # a Ray task holds one CPU
-            plan_study(plan, profile, backend, workers, progress and local)
+            plan_study(plan, profile, backend, workers, inner_bars)
         plan_trajectories(plan, backend)
         names = [*plan.done, *(job.name for job in plan.jobs)]
         costs = {name: expected_cost(name, profile, backend) for name in names}
@@ -89,6 +91,7 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
                     plan.jobs,
                     on_start=lambda job: _log_start(job, plan, log, stages),
                     on_done=lambda job, result: _log_done(job, result, plan, log, stages),
+                    costs=costs,
                 )
             )
         _record_stages(run, plan, cache, executor.placement)

@@ -1,0 +1,76 @@
+"""The local executor: every job as soon as its dependencies are done, on its worker
+threads, the one with the most work behind it first; results as by a plain loop."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from tolins.bench.pipeline.executor import Job, LocalExecutor, critical_paths
+
+_BARRIER = threading.Barrier(2, timeout=10)
+_LOG: list[str] = []
+
+
+def _meet(name: str) -> str:
+    _BARRIER.wait()  # both workers must hold a job at once, or this times out
+    return name
+
+
+def _record(name: str, *deps: object) -> str:
+    _LOG.append(name)
+    return name + "".join(f"<{d}" for d in deps)
+
+
+def _fail(name: str) -> str:
+    raise RuntimeError(f"{name} failed")
+
+
+def _slow(name: str) -> str:
+    time.sleep(0.2)
+    _LOG.append(name)
+    return name
+
+
+def test_independent_jobs_run_side_by_side() -> None:
+    jobs = [Job("a", _meet, ("a",)), Job("b", _meet, ("b",))]
+    assert LocalExecutor(2).run(jobs) == {"a": "a", "b": "b"}
+
+
+def test_a_job_waits_for_its_dependencies_and_takes_their_results() -> None:
+    _LOG.clear()
+    jobs = [
+        Job("train", _slow, ("train",)),
+        Job("eval", _record, ("eval",), deps=("train",)),
+        Job("other", _record, ("other",)),
+    ]
+    results = LocalExecutor(2).run(jobs)
+    assert results == {"train": "train", "eval": "eval<train", "other": "other"}
+    assert list(results) == ["train", "eval", "other"]  # the jobs' order
+    assert _LOG.index("train") < _LOG.index("eval")
+
+
+def test_the_ready_job_with_the_costliest_chain_starts_first() -> None:
+    _LOG.clear()
+    jobs = [
+        Job("cheap", _record, ("cheap",)),
+        Job("long", _record, ("long",)),
+        Job("after-long", _record, ("after-long",), deps=("long",)),
+    ]
+    costs = {"cheap": 5.0, "long": 3.0, "after-long": 4.0}
+    assert critical_paths(jobs, costs) == {"cheap": 5.0, "long": 7.0, "after-long": 4.0}
+    LocalExecutor(1).run(jobs, costs=costs)
+    assert _LOG == ["long", "cheap", "after-long"]  # by the chain behind each: 7, 5, 4
+
+
+def test_a_failure_stops_the_run_and_is_raised() -> None:
+    _LOG.clear()
+    jobs = [
+        Job("bad", _fail, ("bad",)),
+        Job("after", _record, ("after",), deps=("bad",)),
+    ]
+    with pytest.raises(RuntimeError, match="bad failed"):
+        LocalExecutor(2).run(jobs)
+    assert "after" not in _LOG

@@ -14,7 +14,8 @@ whose runs differ by evaluation alone).
 A row *differs* when its CI lies beyond that margin (A higher or B higher) and is
 *consistent* otherwise: no difference was detected at that resolution, which is what a
 reproduction can show. A row is *not comparable* when its eval env differs between A and
-B, or the runs' backend or profile do (a field a run does not state, such as the profile
+B (its workpiece: the ``-v1`` and ``-v2`` ids of one preset compare), or the runs' backend
+or profile do (a field a run does not state, such as the profile
 of ``tolins evaluate --out``, is not held against it): its interval is still given.
 """
 
@@ -134,7 +135,13 @@ def _not_comparable(
     a: dict[str, Any], b: dict[str, Any], row_a: dict[str, Any], row_b: dict[str, Any]
 ) -> str | None:
     """What differs between two runs of one row (``None`` stated on a side: not held)."""
-    pairs = [("eval env", row_a.get("eval_env"), row_b.get("eval_env"))]
+    # The physics versions of one workpiece give the same outcomes (tolins.physics.versions):
+    # a -v2 row compares with its -v1 row.
+    envs = [
+        env if env is None else env_label(str(env))
+        for env in (row_a.get("eval_env"), row_b.get("eval_env"))
+    ]
+    pairs = [("eval env", *envs)]
     pairs += [(key, a.get(key), b.get(key)) for key in ("backend", "profile")]
     differ = [f"{key} {x} vs {y}" for key, x, y in pairs if None not in (x, y) and x != y]
     return ", ".join(differ) or None

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from tolins.envs.tasks import env_label
+
 #: (figure, column heading) of the table, in order.
 FORCE_COLUMNS = (
     ("peak_force", "peak force (N)"),
@@ -42,7 +44,7 @@ def format_force_table(rows: dict[str, dict[str, Any]]) -> str:
         "|---|---|---|" + "---|" * len(FORCE_COLUMNS),
     ]
     for row_id, entry in shown.items():
-        cells = [row_id, entry["policy"], entry["eval_env"].removeprefix("tolins/")]
+        cells = [row_id, entry["policy"], env_label(entry["eval_env"])]
         for name, _ in FORCE_COLUMNS:
             cells.append(f"{entry[f'{name}_mean']:.2f} ± {entry[f'{name}_std']:.2f}")
         lines.append("| " + " | ".join(cells) + " |")

@@ -141,7 +141,7 @@ def test_evaluate_prints_and_writes_the_force_figures(tmp_path, capsys):
     assert main([*argv, "--backend", "kinematic", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
     assert "| ID | policy | eval env | peak force (N) | force in contact (N) |" in printed
-    assert re.search(r"\| efficient \| efficient \| Circle2x2-v1 \| 1\.00 ± 0\.00 \|", printed)
+    assert re.search(r"\| efficient \| efficient \| Circle2x2 \| 1\.00 ± 0\.00 \|", printed)
     assert (tmp_path / "force_profile.png").stat().st_size > 1000
     document = read_results(tmp_path)
     assert document["schema"] == SCHEMA

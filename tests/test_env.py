@@ -20,7 +20,7 @@ def env() -> InsertionEnv:
     return InsertionEnv(tolins.CircularSocket(2, 2))
 
 
-@pytest.mark.parametrize("gym_id", [task.gym_id for task in TASKS])
+@pytest.mark.parametrize("gym_id", [task.gym_id_of(v) for v in (1, 2) for task in TASKS])
 def test_check_env_on_every_registered_id(gym_id: str) -> None:
     check_env(gym.make(gym_id).unwrapped, skip_render_check=True)
 

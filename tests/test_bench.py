@@ -216,8 +216,9 @@ def test_an_interrupted_bench_resumes_to_the_same_results(tmp_path):
         run_bench(config, progress=False, log=interrupt)
     assert not (tmp_path / "b" / "results.json").exists()  # nothing reported half-way
     resumed = run_bench(config, progress=False, log=lambda _: None)
-    assert {"bc_safe-seed0", "pi_n_safe-seed0", "pi_n_efficient-seed0"} <= set(resumed.cached)
-    assert "pi_phi_circle-seed0" not in resumed.cached
+    # What finished before the interruption is cached (stages run side by side, so which
+    # did depends on the schedule); the interrupted training is not.
+    assert "bc_safe-seed0" in resumed.cached and "pi_phi_circle-seed0" not in resumed.cached
     assert resumed.results == whole.results
 
 
@@ -248,8 +249,10 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(tmp_path
 
     (tmp_path / "a").rename(tmp_path / "b")
     resumed = quiet(config("b"))
-    # π_n resumed from its checkpoint
-    assert resumed.cached == ["demos-Circle2x2-safe-seed0-0", "bc_safe-seed0"]
+    # π_n resumed from its checkpoint (the study, which needs no training, may have run
+    # beside it and finished)
+    assert {"demos-Circle2x2-safe-seed0-0", "bc_safe-seed0"} <= set(resumed.cached)
+    assert "pi_n_safe-seed0" not in resumed.cached
     assert resumed.results == whole.results
 
     (tmp_path / "b").rename(tmp_path / "c")

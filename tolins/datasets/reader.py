@@ -22,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 from tolins.datasets.envspec import tolins_ids
+from tolins.datasets.target import HDF5_IO
 from tolins.datasets.writer import UNITS
 from tolins.rollouts.episodes import Episode
 
@@ -186,9 +187,10 @@ def _reason(error: Exception) -> str:
 def load_demonstrations(source: str | os.PathLike, env_id: str | None = None) -> list[Episode]:
     """Every episode of the dataset ``source`` (checked by :func:`open_dataset` and
     :func:`check_episode`), in order. Raises ``ValueError`` naming what is wrong."""
-    dataset = open_dataset(source, env_id)
     rollouts = []
-    for episode in _episodes(dataset, str(source)):
-        check_episode(episode, dataset, str(source))
-        rollouts.append(to_rollout(episode))
+    with HDF5_IO:
+        dataset = open_dataset(source, env_id)
+        for episode in _episodes(dataset, str(source)):
+            check_episode(episode, dataset, str(source))
+            rollouts.append(to_rollout(episode))
     return rollouts

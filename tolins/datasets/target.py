@@ -21,6 +21,11 @@ from pathlib import Path
 from tolins import atomic
 
 #: The dataset ids allowed, in words (what :func:`check_name` accepts).
+#: Held around every HDF5 file access of this package's datasets: HDF5 locks the files it
+#: opens, and two threads of one process that open datasets at once (the bench's stages
+#: side by side) were refused (``BlockingIOError``, "unable to lock file").
+HDF5_IO = threading.Lock()
+
 ID_FORM = (
     "(namespace/)name-vN of letters, digits, '-' and '_' (a namespace of 2 or more "
     "characters, a version N of digits), e.g. tolins/circle2x2/expert-safe-v0"

@@ -29,7 +29,7 @@ import numpy as np
 
 from tolins.datasets.envspec import dataset_env_spec, socket_to_json
 from tolins.datasets.sources import Source
-from tolins.datasets.target import claim_target, temporary_folder
+from tolins.datasets.target import HDF5_IO, claim_target, temporary_folder
 from tolins.rollouts.collectors import Transitions
 from tolins.rollouts.episodes import run_episode
 
@@ -136,21 +136,24 @@ def write_dataset(
     with claim_target(root, name) as target, contextlib.closing(gym.make(spec)) as env:
         temp = temporary_folder(target)
         try:
-            storage = MinariStorage.new(
-                temp / "data",
-                observation_space=env.observation_space,
-                action_space=env.action_space,
-                env_spec=spec,
-            )
+            records = []
             for index, seed_i in enumerate(episode_seeds(seed, episodes, stream)):
                 source = sources[index % len(sources)]
-                record = record_episode(env, source.make(seed_i), seed_i, source.name, index)
-                storage.update_episodes([record.buffer])
-                storage.update_episode_metadata([record.metadata], [index])
+                records.append(record_episode(env, source.make(seed_i), seed_i, source.name, index))
                 if on_episode is not None:
-                    on_episode(record)
+                    on_episode(records[-1])
             metadata = _metadata(name, env_id, backend, seed, sources, description)
-            storage.update_metadata({**metadata, "tolins_stream": int(stream)})
+            with HDF5_IO:
+                storage = MinariStorage.new(
+                    temp / "data",
+                    observation_space=env.observation_space,
+                    action_space=env.action_space,
+                    env_spec=spec,
+                )
+                for index, record in enumerate(records):
+                    storage.update_episodes([record.buffer])
+                    storage.update_episode_metadata([record.metadata], [index])
+                storage.update_metadata({**metadata, "tolins_stream": int(stream)})
             _move_into_place(temp, target)
         except BaseException:
             shutil.rmtree(temp, ignore_errors=True)

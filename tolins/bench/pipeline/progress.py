@@ -46,8 +46,8 @@ STEP_SECONDS = {
     "tolerance-guided": 0.6e-3,
     "ppo": 2.9e-3,
     "sac": 5.7e-3,
-    "bc": 9e-6,  # per demonstration step and epoch
-    "study": 0.075,  # per workpiece, MuJoCo contact outcomes
+    "bc": 2.5e-6,  # per demonstration step and epoch
+    "study": 0.15,  # per workpiece, MuJoCo contact outcomes
     "study-model": 0.01,  # per workpiece, the tolerance model's outcomes (kinematic)
 }
 #: An inference-wrapped policy (π_φ*) costs this many times its policy's episodes.

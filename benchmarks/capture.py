@@ -4,6 +4,7 @@ Usage::
 
     python benchmarks/capture.py                   # 4 cases × 2 speeds, about a minute
     python benchmarks/capture.py --eager-sensors   # sensors in every physics step
+    python benchmarks/capture.py --physics-version 2   # the ``-v2`` physics
 
 For each case (2*2 socket offset in x and in theta, square and hexagon peg offset in
 x) and push speed (2.5 and 0.5 mm/s), the offset is bisected between one that inserts
@@ -63,10 +64,12 @@ def inserts(env: InsertionEnv, axis: int, offset: float, speed: float) -> bool:
     return False
 
 
-def largest_inserting(case: Case, speed: float, resolution: float) -> float:
+def largest_inserting(
+    case: Case, speed: float, resolution: float, physics_version: int = 1
+) -> float:
     """Bisection between ``case.inside`` and ``case.outside``; ``ValueError`` if they do
     not bracket the change."""
-    env = InsertionEnv(case.socket, measurement_noise=0)
+    env = InsertionEnv(case.socket, measurement_noise=0, physics_version=physics_version)
     lo, hi = case.inside, case.outside
     if not inserts(env, case.axis, lo, speed) or inserts(env, case.axis, hi, speed):
         raise ValueError(f"{case.name} at {speed} mm/s: {lo}..{hi} does not bracket the change")
@@ -84,6 +87,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--eager-sensors", action="store_true", help="sensors in every physics step (before 19)"
     )
+    parser.add_argument(
+        "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
+    )
     args = parser.parse_args(argv)
     ServoStepper.lazy_sensors = not args.eager_sensors
     start = time.perf_counter()
@@ -91,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|")
     for case in CASES:
         step = args.resolution / (10 if case.axis == 2 else 1)
-        fast, slow = (largest_inserting(case, s, step) for s in (FAST, SLOW))
+        fast, slow = (largest_inserting(case, s, step, args.physics_version) for s in (FAST, SLOW))
         print(
             f"| {case.name} ({case.limit:g}) | {fast:.5f} | {slow:.5f} | "
             f"{(fast - case.limit) * 1e3:+.1f} / {(slow - case.limit) * 1e3:+.1f} |"

@@ -7,6 +7,7 @@ Usage::
     python benchmarks/physics_vs_geometry.py --probes 200 --seed 3 --no-slow
     python benchmarks/physics_vs_geometry.py --hole-sides 32   # experiment: finer round holes
     python benchmarks/physics_vs_geometry.py --grade 20    # 2*2, 2*8, square, hexagon at 20 µm
+    python benchmarks/physics_vs_geometry.py --physics-version 2   # the ``-v2`` physics
 
 ``--grade UM`` probes the 2*2 and 2*8 sockets and the square and hexagon pegs with their
 holes resized to a radial clearance of UM µm (``tolins.geometry.specs.with_clearance``,
@@ -58,6 +59,7 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import dataclasses
 import math
 import os
 import platform
@@ -89,6 +91,7 @@ class Socket:
     name: str
     family: str
     spec: object
+    physics_version: int = 1
 
 
 def graded_sockets(grade_um: float) -> list[Socket]:
@@ -279,9 +282,12 @@ def env_for(sock: Socket) -> InsertionEnv:
     envs = getattr(_local, "envs", None)
     if envs is None:
         envs = _local.envs = {}
-    if sock.name not in envs:
-        envs[sock.name] = InsertionEnv(sock.spec, measurement_noise=0)
-    return envs[sock.name]
+    key = (sock.name, sock.physics_version)
+    if key not in envs:
+        envs[key] = InsertionEnv(
+            sock.spec, measurement_noise=0, physics_version=sock.physics_version
+        )
+    return envs[key]
 
 
 def push(sock: Socket, pose: np.ndarray, speed: float) -> tuple[str, float, float]:
@@ -323,7 +329,7 @@ def run_physics(pool, sock: Socket, probes: list[Probe], speed: float, chunk: in
 def describe_contacts(sock: Socket, pose: np.ndarray, speed: float) -> list[str]:
     """The contacts when the pins' descent is decided: at the first physics step with
     contact, and at the first step where the tips are 20 µm below the top (if any)."""
-    env = InsertionEnv(sock.spec, measurement_noise=0)
+    env = InsertionEnv(sock.spec, measurement_noise=0, physics_version=sock.physics_version)
     env.reset(options={"pose": [*pose, START_HEIGHT]})
     m, d = env.backend.model, env.backend.data
     stepper = env.backend.stepper
@@ -426,6 +432,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", nargs="*", help="socket names to run (default: all)")
     parser.add_argument("--diagnose", type=int, default=0, help="print contacts of K cases")
     parser.add_argument("--hole-sides", type=int, help="experiment: round holes as n-gons")
+    parser.add_argument(
+        "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
+    )
     args = parser.parse_args(argv)
     if args.quick:
         args.probes, args.directions, args.no_slow = min(args.probes, 24), 32, True
@@ -438,12 +447,17 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"physics vs geometry: {args.probes} probes per socket, seed {args.seed}, "
         f"{args.workers} workers, band ±{args.band:g} µm, offsets ±{args.band_max:g} µm, "
-        f"round holes {specs_module.CIRCLE_HOLE_SIDES}-gons; Python "
+        f"round holes {specs_module.CIRCLE_HOLE_SIDES}-gons, physics -v{args.physics_version}; "
+        f"Python "
         f"{platform.python_version()}, MuJoCo {mujoco.__version__}, NumPy {np.__version__}, "
         f"{os.cpu_count()} CPUs"
     )
     pool_of = sockets(args.seed) if args.grade is None else graded_sockets(args.grade)
-    selected = [s for s in pool_of if not args.only or s.name in args.only]
+    selected = [
+        dataclasses.replace(s, physics_version=args.physics_version)
+        for s in pool_of
+        if not args.only or s.name in args.only
+    ]
     speeds = [FAST] if args.no_slow else [FAST, SLOW]
     rows, all_ok = [], True
     with concurrent.futures.ThreadPoolExecutor(args.workers) as pool:

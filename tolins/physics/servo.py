@@ -225,6 +225,7 @@ class ServoStepper:
         self.checks = contact_checks
         self.free_flight = free_flight
         self.step_window, self.step_factor = 0, 1
+        self._window_left = 0
         self._limits: ServoLimits | None = None
         self._bind(model, data)
 
@@ -321,6 +322,7 @@ class ServoStepper:
                 _free_steps(timestep, tuple(chunks)),
             )
             self.step_window, self.step_factor = int(window[0]), int(factor[0])
+        self._window_left = self.step_window
 
     def no_force(self) -> float:
         return 0.0
@@ -330,7 +332,7 @@ class ServoStepper:
         the model's sensors are switched off for all but the last step, so the model must
         not be stepped elsewhere meanwhile."""
         m, d = self.model, self.data
-        segments, self.step_window = chunk_segments(n, self.step_window, self.step_factor)
+        segments, self._window_left = chunk_segments(n, self._window_left, self.step_factor)
         run_segments(lambda k: mujoco.mj_step(m, d, nstep=k), [m], segments, self.lazy_sensors)
 
     def higher_force(self, peak: float) -> float:
@@ -468,6 +470,7 @@ class BatchServo:
                 sum(chunks) * timestep,
                 _free_steps(timestep, tuple(chunks)),
             )
+        self._windows_left = self.step_windows.copy()
 
     def no_force(self) -> np.ndarray:
         return np.zeros(len(self.ids))
@@ -475,13 +478,13 @@ class BatchServo:
     def physics_steps(self, n: int) -> None:
         """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``: one
         ``Batch.step`` per physics step length chosen."""
-        plans = np.stack([self.step_windows, self.step_factors], axis=1)
+        plans = np.stack([self._windows_left, self.step_factors], axis=1)
         for window, factor in np.unique(plans, axis=0).tolist():
-            chosen = (self.step_windows == window) & (self.step_factors == factor)
+            chosen = (self._windows_left == window) & (self.step_factors == factor)
             ids = self.ids[chosen]
             models = list({id(self.models[i]): self.models[i] for i in ids.tolist()}.values())
             segments, left = chunk_segments(n, window, factor)
-            self.step_windows[chosen] = left
+            self._windows_left[chosen] = left
             run_segments(
                 lambda k, ids=ids: self.batch.step(ids, nstep=k),
                 models,

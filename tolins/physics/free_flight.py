@@ -63,9 +63,9 @@ _Z = 2
 #: Margin on the servo forces of :data:`FORCE_AFTER`.
 SATURATION_FACTOR = 1.25
 #: ``(omega t, bound)``: a servo's largest force from ``t`` after the re-anchoring on, over
-#: ``kv (|v0| + |u|)``, at the contact step and at 5 ms (the largest measured over a grid of
-#: ``v0`` and ``u`` of every joint, ``benchmarks/v2_equivalence.py``; ``t`` of 0, 5, 10 and
-#: 15 ms at the slides' nominal ``omega``).
+#: ``kv (|v0| + |u|)``, at the contact step and at 5 ms (the largest measured on the 2*2 over
+#: a 9 × 9 grid of ``v0`` and ``u`` from -1 to 1 times every joint's full speed; ``t`` of 0,
+#: 5, 10 and 15 ms at the slides' nominal ``omega``).
 FORCE_AFTER = ((0.0, 1.12), (2.13, 0.33), (4.26, 0.19), (6.39, 0.13))
 #: The windows (s) on the contact step a free-flight control step may start with, so that
 #: the servos' transient has decayed below their force limits when the longer step begins.

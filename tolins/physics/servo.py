@@ -227,6 +227,7 @@ class ServoStepper:
         self.step_window, self.step_factor = 0, 1
         self._window_left = 0
         self._limits: ServoLimits | None = None
+        self._limits_key: tuple | None = None
         self._bind(model, data)
 
     def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
@@ -278,7 +279,21 @@ class ServoStepper:
         (the model's parameters are read anew: a randomised-physics draw applies from here)."""
         m, d = self.model, self.data
         if self.free_flight:
-            self._limits = ServoLimits.stack([servo_limits(m)])
+            # Read anew only for another model (held here, so never a reused id) or other
+            # servo parameters (a randomised draw changes them in place).
+            key = (
+                m,
+                *(
+                    a.tobytes()
+                    for a in (m.actuator_gainprm, m.actuator_biasprm, m.actuator_forcerange)
+                ),
+            )
+            if (
+                self._limits_key is None
+                or key[0] is not self._limits_key[0]
+                or key[1:] != self._limits_key[1:]
+            ):
+                self._limits, self._limits_key = ServoLimits.stack([servo_limits(m)]), key
         mujoco.mj_resetData(m, d)
         d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
         d.act[:] = d.qpos

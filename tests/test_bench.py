@@ -148,9 +148,10 @@ def _check_outputs(out: Path, backend: str) -> dict:
     run = json.loads((out / "run.json").read_text())
     assert set(run["claims"]) == {c.name for c in CLAIMS}
     claims = dict(run["claims"])
-    deep_rl = claims.pop("rs_gail_vs_deep_rl")  # tiny: 200 env steps against RS-GAIL's 240
-    assert deep_rl["verdict"] == NOT_EVALUATED and "unequal budgets" in deep_rl["basis"]
-    assert len(deep_rl["comparisons"]) == 4
+    for name in ("rs_gail_vs_deep_rl", "rs_gail_vs_dense_deep_rl"):
+        deep_rl = claims.pop(name)  # tiny: 200 env steps against RS-GAIL's 240
+        assert deep_rl["verdict"] == NOT_EVALUATED and "unequal budgets" in deep_rl["basis"]
+        assert len(deep_rl["comparisons"]) == 4
     assert all(c["verdict"] in (HELD, NOT_HELD, INCONCLUSIVE) for c in claims.values())
     for name in run["claims"]:
         assert (out / "claims" / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -174,9 +175,9 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
     again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
-    # 5 demonstration datasets, 8 + 4 (SB3) trainings, 15 + 4 evaluations, the study, 5
+    # 5 demonstration datasets, 8 + 8 (SB3) trainings, 15 + 8 evaluations, the study, 5
     # robustness stages, π_n's trajectories: none ran again
-    assert len(again.cached) == 43
+    assert len(again.cached) == 51
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
     # the robustness table on MuJoCo: tests/test_bench_robustness.py

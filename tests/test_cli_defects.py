@@ -289,7 +289,8 @@ def test_expected_costs_follow_the_budgets_and_the_measured_reference_run():
     measured = {name: stage["wall_s"] for name, stage in record["stages"].items()}
     expected = {name: expected_cost(name, quick, "mujoco") for name in measured}
     assert 0.5 < sum(expected.values()) / sum(measured.values()) < 2.0
-    for kind in ("bc_", "pi_n_", "pi_phi_", "ppo_", "sac_", "eval-", "inference-study"):
+    # (the quick profile trains no deep-RL baseline)
+    for kind in ("bc_", "pi_n_", "pi_phi_", "eval-", "inference-study"):
         names = [name for name in measured if name.startswith(kind)]
         ratio = sum(expected[n] for n in names) / sum(measured[n] for n in names)
         assert 0.4 < ratio < 2.5, (kind, ratio)

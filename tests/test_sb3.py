@@ -10,13 +10,13 @@ import pytest
 from stable_baselines3.common.env_checker import check_env
 
 import tolins
-from tolins.bench.pipeline.profiles import PROFILES
+from tolins.bench.pipeline.profiles import BASELINE_ENVS, PROFILES
 from tolins.bench.table.baselines import env_step_curves
 from tolins.bench.table.claims import CLAIMS
 from tolins.bench.table.rows import BASELINE_ROWS, ROW_IDS, SB3_METHODS, select_rows
 from tolins.envs.wrappers import agent_env
 from tolins.learning.agents.actors import make_actor
-from tolins.learning.agents.sb3 import OBSERVATION_SCALE, make_model, train_sb3
+from tolins.learning.agents.sb3 import OBSERVATION_SCALE, PPO_ROLLOUT, make_model, train_sb3
 from tolins.learning.agents.sb3_config import CURVES, MODEL, Sb3Config
 from tolins.paper import A_MAX, HORIZON
 
@@ -58,22 +58,34 @@ def test_budgets_are_env_steps_and_the_paper_profile_matches_rs_gail() -> None:
     per_iteration = paper.popsize * paper.candidate_episodes + paper.curve_episodes
     assert paper.rs_gail_env_steps == paper.nominal_iterations * per_iteration * HORIZON
     for algorithm in SB3_METHODS:
-        config = paper.sb3(algorithm, CIRCLE, "mujoco", 2)
+        config = paper.sb3(algorithm, CIRCLE, "mujoco", 2, "sparse")
         assert config.env_steps >= paper.rs_gail_env_steps
-        assert config.reward_mode == "dense" and config.seed == 2
-        assert quick.sb3(algorithm, CIRCLE, "mujoco", 0).env_steps < config.env_steps
+        assert config.reward_mode == "sparse" and config.seed == 2
+        assert config.n_envs == BASELINE_ENVS[algorithm]
+    # The quick profile trains no baseline: its table shows reference:paper's.
+    assert not quick.baselines and paper.baselines
+    assert [row.id for row in select_rows(None, baselines=False)] == list(ROW_IDS)
+
+
+def test_ppo_keeps_sb3s_rollout_per_update_on_any_number_of_envs() -> None:
+    for n_envs in (1, 8):
+        model = make_model(Sb3Config("ppo", CIRCLE, backend="kinematic", n_envs=n_envs))
+        assert model.n_steps * model.n_envs == PPO_ROLLOUT
 
 
 def test_baseline_rows_are_beyond_the_paper_and_run_by_default() -> None:
     ids = [row.id for row in BASELINE_ROWS]
-    assert all(i.startswith("R1.") for i in ids) and not set(ids) & set(ROW_IDS)
+    assert all(i[:3] in ("R1.", "R2.") for i in ids) and not set(ids) & set(ROW_IDS)
     assert [row.id for row in select_rows(None)][-len(ids) :] == ids
     assert [row.id for row in select_rows("R1.2,C2.3")] == ["C2.3", "R1.2"]
     for row in BASELINE_ROWS:
         (training,) = row.trainings
         assert training.method in SB3_METHODS and training.env_ids == (row.eval_env,)
-    claim = next(c for c in CLAIMS if c.name == "rs_gail_vs_deep_rl")
-    assert {worse for _, worse in claim.pairs} == set(ids)
+        # R1: the paper's sparse reward; R2: the dense one.
+        assert training.reward_mode == ("sparse" if row.id.startswith("R1.") else "dense")
+    for name, group in (("rs_gail_vs_deep_rl", "R1."), ("rs_gail_vs_dense_deep_rl", "R2.")):
+        claim = next(c for c in CLAIMS if c.name == name)
+        assert {worse for _, worse in claim.pairs} == {i for i in ids if i.startswith(group)}
 
 
 def test_the_observation_scale_is_inside_the_saved_policy() -> None:
@@ -108,9 +120,10 @@ def test_a_short_run_writes_a_model_the_bench_can_evaluate_and_its_curve(
     observation = gym.make(CIRCLE, backend="kinematic").reset(seed=4)[0]
     expected = model.predict(observation.astype(np.float32), deterministic=True)[0] * A_MAX
     assert np.allclose(actor(observation), expected, atol=1e-6)
-    curves = env_step_curves({f"{algorithm}_circle-seed0": tmp_path, "bc_safe-seed0": tmp_path})
-    assert list(curves) == [f"{algorithm}_circle-seed0"]
-    steps = curves[f"{algorithm}_circle-seed0"]["env_steps"]
+    stage = f"{algorithm}_circle_dense-seed0"
+    curves = env_step_curves({stage: tmp_path, "bc_safe-seed0": tmp_path})
+    assert list(curves) == [stage]
+    steps = curves[stage]["env_steps"]
     assert np.array_equal(steps, [h["env_steps"] for h in history])
 
 

@@ -8,6 +8,12 @@ from tolins.learning.agents.sb3_config import Sb3Config
 from tolins.learning.imitation.config import BCConfig, ResidualConfig, RSGailConfig, TaskConfig
 from tolins.paper import HORIZON
 
+#: Training envs per deep-RL baseline, stepped in one batch. PPO's rollout stays SB3's
+#: 2,048 transitions per update (``n_steps`` 256 per env; 2.1× the env steps per second
+#: on 2*2, benchmarks/README.md); SAC's cost is its one gradient step per transition, which
+#: more envs would not cut without changing that ratio.
+BASELINE_ENVS = {"ppo": 8, "sac": 1}
+
 
 @dataclass(frozen=True, kw_only=True)
 class Profile:
@@ -27,9 +33,10 @@ class Profile:
         study_samples: Workpieces of the inference study.
         recorded_episodes: Evaluation episodes per row recorded to rerun (first seed).
         sigma0: CMA-ES's initial step size.
-        rl_env_steps: Env steps of each deep-RL baseline (PPO, SAC; rows R1.x);
+        baselines: Train the deep-RL baselines (rows R1.x, R2.x) unless rows are named;
+            without them the table shows theirs from ``reference:paper``.
+        rl_env_steps: Env steps of each deep-RL baseline (PPO, SAC);
             ``None``: :attr:`rs_gail_env_steps`, RS-GAIL's own budget for π_n.
-        rl_reward_mode: The reward the baselines learn from (evaluated with the sparse one).
         rl_curve_points: Points of each baseline's learning curve.
         robustness_episodes: Episodes per cell of the robustness table (policy ×
             condition, :mod:`tolins.bench.table.robustness`) and training seed.
@@ -48,9 +55,9 @@ class Profile:
     study_samples: int
     recorded_episodes: int
     sigma0: float = 0.02
+    baselines: bool = True
     rl_env_steps: int | None = None
-    rl_reward_mode: str = "dense"
-    rl_curve_points: int = 10
+    rl_curve_points: int = 20
     robustness_episodes: int = 6
 
     @property
@@ -71,17 +78,20 @@ class Profile:
         """Env steps of each PPO/SAC training: ``rl_env_steps``, else RS-GAIL's for π_n."""
         return self.rl_env_steps or self.rs_gail_env_steps
 
-    def sb3(self, algorithm: str, env_id: str, backend: str, seed: int) -> Sb3Config:
+    def sb3(
+        self, algorithm: str, env_id: str, backend: str, seed: int, reward_mode: str
+    ) -> Sb3Config:
         steps = self.deep_rl_env_steps
         return Sb3Config(
             algorithm,
             env_id,
             backend=backend,
-            reward_mode=self.rl_reward_mode,
+            reward_mode=reward_mode,
             env_steps=steps,
             curve_every=max(steps // self.rl_curve_points, 1),
             curve_episodes=self.curve_episodes,
             seed=seed,
+            n_envs=BASELINE_ENVS[algorithm],
         )
 
     def task(self, backend: str, expert: str, seed: int) -> TaskConfig:
@@ -126,11 +136,12 @@ PROFILES: dict[str, Profile] = {
         recorded_episodes=3,
         robustness_episodes=20,
     ),
-    # About 15 min on 2 cores with three training seeds (the unit of the verdicts): a third
+    # About 15 min on 2 cores with three training seeds (the unit of the verdicts): a tenth
     # of the paper's per-seed budgets (10 RS-GAIL iterations for π_n, 8 for φ2), 50
-    # evaluation episodes per row and seed; the baselines get 3,000 env steps each
-    # (RS-GAIL's π_n: 28,800), the start of their curves only (benchmarks/README.md);
-    # 6 episodes per robustness cell and seed (the default; 50 cells, docs/benchmark.md).
+    # evaluation episodes per row and seed; 6 episodes per robustness cell and seed (the
+    # default; 50 cells, docs/benchmark.md). No deep-RL baselines: at RS-GAIL's quick
+    # budget (28,800 env steps) SAC alone would take 3 min per run (48 runs), and on the
+    # sparse reward their curves stay at zero; the table shows theirs from reference:paper.
     "quick": Profile(
         name="quick",
         demonstrations=50,
@@ -144,7 +155,7 @@ PROFILES: dict[str, Profile] = {
         seeds=3,
         study_samples=500,
         recorded_episodes=2,
-        rl_env_steps=3_000,
+        baselines=False,
     ),
     # Smoke test of the whole pipeline (CI): every stage runs, nothing is learnt.
     "tiny": Profile(

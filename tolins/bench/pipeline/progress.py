@@ -39,12 +39,13 @@ from tolins.paper import HORIZON
 #: The kinds of stages, in the order a run meets them.
 KINDS = ("demonstrations", "training", "evaluation", "robustness", "study")
 #: Seconds per budgeted env step (per BC sample and epoch, per study workpiece) of each
-#: kind of work on the MuJoCo backend, 2 cores (``reference:quick``'s stage wall times).
+#: kind of work on the MuJoCo backend, 2 cores (``reference:quick``'s stage wall times;
+#: the deep-RL baselines': benchmarks/README.md, two stages side by side).
 STEP_SECONDS = {
     "rollout": 1.75e-3,  # an evaluation, robustness or demonstration episode's step
     "rs-gail": 1.4e-3,
     "tolerance-guided": 0.6e-3,
-    "ppo": 2.9e-3,
+    "ppo": 1.5e-3,  # on 8 envs in one batch
     "sac": 5.7e-3,
     "bc": 2.5e-6,  # per demonstration step and epoch
     "study": 0.15,  # per workpiece, MuJoCo contact outcomes

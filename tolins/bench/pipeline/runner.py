@@ -59,7 +59,7 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
     began = time.perf_counter()
     profile, backend = PROFILES[config.profile], config.backend
     seeds = config.seeds or profile.seeds
-    rows = select_rows(config.rows)
+    rows = select_rows(config.rows, baselines=profile.baselines)
     out = Path(config.out)
     cache = StageCache(out)
     run = BenchRun(config, profile, {}, [], None, 0.0)

@@ -36,7 +36,7 @@ def training_spec(name: str, seed: int, profile: Profile, backend: str) -> Train
     demonstrations and the BC, RS-GAIL and residual settings of ``profile``."""
     training = TRAININGS[name]
     if training.method in SB3_METHODS:
-        sb3 = profile.sb3(training.method, training.env_ids[0], backend, seed)
+        sb3 = profile.sb3(training.method, training.env_ids[0], backend, seed, training.reward_mode)
         return TrainingSpec(training, seed, sb3=sb3)
     return TrainingSpec(
         training,

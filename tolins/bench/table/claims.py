@@ -71,8 +71,15 @@ CLAIMS: tuple[Claim, ...] = (
     Claim("polygon_transfer", "π_φ beats π_n on the unseen pentagon", (("P2.2", "P2.1"),)),
     Claim(
         "rs_gail_vs_deep_rl",
-        "RS-GAIL (π_n) beats PPO/SAC from scratch at equal env steps (beyond the paper)",
+        "RS-GAIL (π_n) beats PPO/SAC from scratch on the sparse reward at equal env steps",
         (("C2.3", "R1.1"), ("C2.3", "R1.2"), ("P1.3", "R1.3"), ("P1.3", "R1.4")),
+        equal_budgets=True,
+    ),
+    Claim(
+        "rs_gail_vs_dense_deep_rl",
+        "RS-GAIL (π_n) beats PPO/SAC from scratch on a dense reward at equal env steps "
+        "(beyond the paper)",
+        (("C2.3", "R2.1"), ("C2.3", "R2.2"), ("P1.3", "R2.3"), ("P1.3", "R2.4")),
         equal_budgets=True,
     ),
 )

@@ -35,6 +35,9 @@ class Training:
         env_ids: Training environments.
         expert: The scripted expert imitated (``safe`` or ``efficient``).
         upstream: The training this one starts from, or ``None``.
+        reward_mode: The reward a deep-RL baseline learns from (``sparse``: the paper's,
+            ``dense``: :mod:`tolins.envs.reward`); ``None`` for imitation, which learns
+            from the paper's sparse reward and its discriminator.
     """
 
     name: str
@@ -42,10 +45,13 @@ class Training:
     env_ids: tuple[str, ...]
     expert: str
     upstream: str | None = None
+    reward_mode: str | None = None
 
 
 #: Trainings by stable-baselines3 (deep RL from scratch, beyond the paper).
 SB3_METHODS = ("ppo", "sac")
+#: The rewards the deep-RL baselines learn from: the paper's, and a shaped one.
+BASELINE_REWARDS = ("sparse", "dense")
 
 
 def _chain(suffix: str, env_ids: tuple[str, ...], expert: str) -> tuple[Training, Training]:
@@ -65,7 +71,8 @@ TRAININGS: dict[str, Training] = {
         *_chain("square", (SQUARE,), "safe"),
         Training("pi_phi_polygon", "tolerance-guided", (SQUARE, HEXAGON), "safe", "pi_n_square"),
         *(
-            Training(f"{algorithm}_{suffix}", algorithm, (env_id,), "safe")
+            Training(f"{algorithm}_{suffix}_{reward}", algorithm, (env_id,), "safe", None, reward)
+            for reward in BASELINE_REWARDS
             for suffix, env_id in (("circle", CIRCLE_2X2), ("square", SQUARE))
             for algorithm in SB3_METHODS
         ),
@@ -122,13 +129,27 @@ ROWS: tuple[Row, ...] = (
 )
 ROW_IDS: tuple[str, ...] = tuple(row.id for row in ROWS)
 
-#: Rows beyond the paper: deep-RL baselines trained from scratch on the dense
-#: reward within RS-GAIL's env-step budget, evaluated like every row (sparse reward).
-BASELINE_ROWS: tuple[Row, ...] = (
-    Row("R1.1", "PPO", "ppo_circle", CIRCLE_2X2, "2*2"),
-    Row("R1.2", "SAC", "sac_circle", CIRCLE_2X2, "2*2"),
-    Row("R1.3", "PPO", "ppo_square", SQUARE, "square"),
-    Row("R1.4", "SAC", "sac_square", SQUARE, "square"),
+#: Rows beyond the paper: deep-RL baselines trained from scratch within RS-GAIL's
+#: env-step budget for π_n, evaluated like every row (sparse reward). R1: on the paper's
+#: sparse reward (what its claim is about); R2: on the dense, shaped reward.
+BASELINE_ROWS: tuple[Row, ...] = tuple(
+    Row(
+        f"R{group}.{index}",
+        f"{algorithm.upper()} ({reward})",
+        f"{algorithm}_{suffix}_{reward}",
+        env_id,
+        train_env,
+    )
+    for group, reward in enumerate(BASELINE_REWARDS, start=1)
+    for index, (algorithm, suffix, env_id, train_env) in enumerate(
+        (
+            ("ppo", "circle", CIRCLE_2X2, "2*2"),
+            ("sac", "circle", CIRCLE_2X2, "2*2"),
+            ("ppo", "square", SQUARE, "square"),
+            ("sac", "square", SQUARE, "square"),
+        ),
+        start=1,
+    )
 )
 #: Table 1's rows, then the baselines: what ``tolins bench`` runs by default.
 ALL_ROWS: tuple[Row, ...] = ROWS + BASELINE_ROWS
@@ -157,11 +178,11 @@ PAPER: dict[str, dict[str, tuple[float, float]]] = {
 }
 
 
-def select_rows(ids: str | list[str] | None) -> list[Row]:
-    """The rows named in ``ids`` (comma-separated or a list; ``None``: all, baselines
-    included), in table order."""
+def select_rows(ids: str | list[str] | None, *, baselines: bool = True) -> list[Row]:
+    """The rows named in ``ids`` (comma-separated or a list; ``None``: Table 1's, then the
+    baselines' if ``baselines``), in table order."""
     if ids is None:
-        return list(ALL_ROWS)
+        return list(ALL_ROWS if baselines else ROWS)
     wanted = [i.strip() for i in ids.split(",")] if isinstance(ids, str) else list(ids)
     unknown = [i for i in wanted if i not in ALL_ROW_IDS]
     if unknown or not wanted:

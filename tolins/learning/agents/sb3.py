@@ -2,9 +2,11 @@
 
 The agent sees the env through :func:`tolins.envs.wrappers.agent_env` (actions in
 ``[-1, 1]``, float32 observations) and learns from ``reward_mode`` (``dense`` by default,
-the mode that learns: benchmarks/README.md). Its network scales the observation by the
-fixed :data:`OBSERVATION_SCALE` (:class:`ScaledObservation`, saved inside the model zip, so
-``tolins evaluate --policy model.zip`` needs no wrapper). Every ``curve_every`` env steps
+the mode that learns: benchmarks/README.md). PPO on ``n_envs`` envs keeps SB3's rollout
+of :data:`PPO_ROLLOUT` transitions per update (``n_steps = PPO_ROLLOUT / n_envs``). Its
+network scales the observation by the fixed :data:`OBSERVATION_SCALE`
+(:class:`ScaledObservation`, saved inside the model zip, so ``tolins evaluate --policy
+model.zip`` needs no wrapper). Every ``curve_every`` env steps
 the deterministic policy is scored with the paper's sparse reward on ``curve_episodes``
 episodes (seeds from :data:`CURVE_SEED`, apart from the bench's evaluation seeds); the
 curve ``curves.csv`` has one row per point with the env steps trained so far.
@@ -41,6 +43,8 @@ ALGORITHMS = dict(zip(ALGORITHM_NAMES, (PPO, SAC), strict=True))
 OBSERVATION_SCALE = np.array([1.0, 1.0, 20.0, 0.1, 0.5, 0.5, 0.5, 0.5], dtype=np.float32)
 #: First seed of the learning-curve episodes (training episodes draw from the model's seed).
 CURVE_SEED = 30_000
+#: SB3's default PPO rollout (``n_steps`` on one env): the transitions of one update.
+PPO_ROLLOUT = 2048
 #: What differs from SB3's defaults, per algorithm (measured: benchmarks/README.md).
 HYPERPARAMETERS: dict[str, dict] = {
     "ppo": {},
@@ -73,6 +77,8 @@ def make_model(config: Sb3Config, **overrides):
         )
     )
     kwargs = {**HYPERPARAMETERS[config.algorithm], **overrides}
+    if config.algorithm == "ppo":
+        kwargs.setdefault("n_steps", max(PPO_ROLLOUT // config.n_envs, 1))
     kwargs["policy_kwargs"] = {
         "features_extractor_class": ScaledObservation,
         **kwargs.get("policy_kwargs", {}),

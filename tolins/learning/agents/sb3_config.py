@@ -28,7 +28,8 @@ class Sb3Config:
         curve_episodes: Sparse-reward episodes per point.
         seed: Seed of the model and the training env.
         n_envs: Training envs stepped side by side (one batch: SB3's ``n_envs``; PPO
-            collects ``n_steps`` per env, SAC one transition per env per step).
+            collects ``2048 / n_envs`` steps per env per update, SAC one transition per
+            env per step).
     """
 
     algorithm: str

@@ -135,7 +135,7 @@ def test_a_stage_runs_once_and_an_interrupted_one_runs_again(tmp_path):
 
 def _check_outputs(out: Path, backend: str) -> dict:
     document = json.loads((out / "results.json").read_text())
-    assert document["schema"] == "tolins.results/2" and document["source"] == "bench"
+    assert document["schema"] == "tolins.results/3" and document["source"] == "bench"
     assert document["backend"] == backend and document["profile"] == "tiny"
     assert read_results(out) == document
     results = document["rows"]

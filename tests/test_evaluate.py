@@ -230,7 +230,7 @@ def test_a_named_evaluation_lines_up_with_a_bench_row_in_compare(tmp_path, capsy
 
 def test_docs_benchmark_md_names_every_field_of_the_results_schema(tmp_path) -> None:
     doc = (Path(__file__).resolve().parents[1] / "docs" / "benchmark.md").read_text()
-    section = doc.split("## `results.json`: schema `tolins.results/2`", 1)[1].split("\n## ")[0]
+    section = doc.split("## `results.json`: schema `tolins.results/3`", 1)[1].split("\n## ")[0]
     named = set(re.findall(r"`([a-z_]+)`", section))
     for braces in re.findall(r"`\{([a-z_,]+)\}(_[a-z_]+)`", section):
         named |= {f"{figure}{braces[1]}" for figure in braces[0].split(",")}

@@ -114,15 +114,17 @@ def test_rows_carry_the_force_figures_per_seed_and_per_episode(tmp_path):
     assert "peak_force_mean" not in row_entry(ROWS[0], [old])
 
 
-def test_results_of_schema_1_are_still_read(tmp_path):
-    assert SCHEMA == "tolins.results/2"
+def test_results_of_schemas_1_and_2_are_still_read(tmp_path):
+    assert SCHEMA == "tolins.results/3"
     entry = row_entry(ROWS[0], [[Episode(1.0, True, 30, 0)]])
-    (tmp_path / "results.json").write_text(
-        json.dumps({"schema": "tolins.results/1", "rows": {"C1.1": entry}})
-    )
-    assert read_results(tmp_path)["rows"]["C1.1"]["reward_mean"] == 1.0
-    (tmp_path / "results.json").write_text(json.dumps({"schema": "tolins.results/3", "rows": {}}))
-    with pytest.raises(ValueError, match=r"allowed: 'tolins\.results/1' or 'tolins\.results/2'"):
+    for schema in ("tolins.results/1", "tolins.results/2"):
+        (tmp_path / "results.json").write_text(
+            json.dumps({"schema": schema, "rows": {"C1.1": entry}})
+        )
+        assert read_results(tmp_path)["rows"]["C1.1"]["reward_mean"] == 1.0
+    (tmp_path / "results.json").write_text(json.dumps({"schema": "tolins.results/4", "rows": {}}))
+    allowed = r"allowed: 'tolins\.results/1' or 'tolins\.results/2' or 'tolins\.results/3'"
+    with pytest.raises(ValueError, match=allowed):
         read_results(tmp_path)
 
 

@@ -8,6 +8,7 @@ import pytest
 import tolins
 from tolins import dmc
 from tolins.envs import TASKS, InsertionEnv
+from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.reward import (
     DENSE_WEIGHTS,
     REWARD_MODES,
@@ -15,8 +16,9 @@ from tolins.envs.reward import (
     clearance_use,
     is_aligned,
     shaping_terms,
+    sparse_return_ceiling,
 )
-from tolins.paper import A_MAX, COLLISION_REWARD, HORIZON, SUCCESS_REWARD
+from tolins.paper import A_MAX, COLLISION_REWARD, CONTROL_DT, HORIZON, SUCCESS_REWARD
 from tolins.policies.experts import SafeExpert
 
 BACKENDS = ("mujoco", "kinematic")
@@ -218,3 +220,34 @@ def test_an_unknown_reward_mode_raises_everywhere(mode) -> None:
         InsertionEnv(SOCKET, reward_mode=mode)
     with pytest.raises(ValueError, match=r"reward_mode=.*allowed: sparse, dense"):
         dmc.load("circle2x2", "insert", task_kwargs={"reward_mode": mode})
+
+
+def _oracle_return(env: InsertionEnv, seed: int) -> tuple[float, float]:
+    """The start height and the sparse return of a policy that sees the true pose and
+    moves at full speed: the goal's horizontal pose, and down."""
+    _, info = env.reset(seed=seed)
+    z0, total, done = float(info["pose"][3]), 0.0, False
+    while not done:
+        pose = np.asarray(info["pose"])
+        horizontal = np.clip(-pose[:3] / CONTROL_DT, -A_MAX[:3], A_MAX[:3])
+        _, reward, terminated, truncated, info = env.step(np.append(horizontal, -A_MAX[3]))
+        total, done = total + reward, terminated or truncated
+    return z0, total
+
+
+def test_the_sparse_return_ceiling_is_what_a_full_speed_oracle_earns():
+    kinematic, mujoco = (
+        InsertionEnv(SOCKET, backend=backend, physics_version=2) for backend in BACKENDS[::-1]
+    )
+    for seed in range(4):
+        # On the paper's simulator the oracle earns the ceiling of its own start height...
+        z0, earned = _oracle_return(kinematic, seed)
+        start = InitialPoseDistribution(z_min=z0, z_max=z0)
+        assert earned == pytest.approx(sparse_return_ceiling(start), abs=1e-9)
+        # ...and on contact physics, whose servos lag the command, at most that.
+        assert _oracle_return(mujoco, seed)[1] <= earned
+    # The mean over the start heights: each height's ceiling, averaged.
+    heights = np.random.default_rng(0).uniform(16.0, 18.0, 200_000)
+    steps = np.ceil((heights + 1.0) / (A_MAX[3] * CONTROL_DT))
+    sampled = np.mean(SUCCESS_REWARD * (1 - steps / HORIZON))
+    assert sparse_return_ceiling() == pytest.approx(sampled, abs=0.05)

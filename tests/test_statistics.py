@@ -5,17 +5,21 @@ from __future__ import annotations
 
 import copy
 import functools
+import math
 
 import numpy as np
 import pytest
 
 from tolins.bench.table.claims import (
+    CEILING,
     CLAIMS,
     HELD,
     INCONCLUSIVE,
+    NO_DIFFERENCE,
     NOT_EVALUATED,
     NOT_HELD,
     ONE_SEED,
+    SMALLEST_EFFECT,
     check_claims,
 )
 from tolins.bench.table.results import row_entry
@@ -211,14 +215,53 @@ def test_every_claim_holds_on_the_papers_own_table_with_five_seeds():
     assert polygon.to_json()["comparisons"][0]["verdict"] == HELD
 
 
-def test_a_half_standard_error_difference_is_inconclusive():
-    # The example: P2.2 vs P2.1 at +0.23 ± 0.50 was called "held".
+def test_a_half_standard_error_difference_inside_delta_is_no_practical_difference():
+    # P2.2 vs P2.1 at +0.23 ± 0.50 is not "held", but it bounds the effect well inside δ.
     means = _paper_table(3)
     means["P2.1"] = [21.0, 21.5, 21.8]
     means["P2.2"] = [21.9, 21.0, 22.1]  # per-seed differences +0.9, -0.5, +0.3
     check = {c.claim.name: c for c in check_claims(_table(means))}["polygon_transfer"]
-    assert check.comparisons[0].difference.estimate == pytest.approx(0.7 / 3)
-    assert check.verdict == INCONCLUSIVE
+    (pair,) = check.comparisons
+    assert pair.difference.estimate == pytest.approx(0.7 / 3)
+    assert -SMALLEST_EFFECT < pair.difference.low < 0 < pair.difference.high < SMALLEST_EFFECT
+    assert check.verdict == pair.verdict == NO_DIFFERENCE
+    assert pair.seeds_to_decide is None and check.to_json()["delta"] == SMALLEST_EFFECT
+
+
+def test_an_undecided_pair_wider_than_delta_says_how_many_seeds_would_decide():
+    means = _paper_table(3)
+    means["P2.1"] = [21.0, 21.0, 21.0]
+    means["P2.2"] = [25.0, 17.0, 22.0]  # per-seed differences +4, -4, +1: mean +1/3
+    (pair,) = {c.claim.name: c for c in check_claims(_table(means))}["polygon_transfer"].comparisons
+    assert pair.verdict == INCONCLUSIVE and pair.difference.high > SMALLEST_EFFECT
+    spread = float(np.std([4.0, -4.0, 1.0], ddof=1))
+    assert pair.spread == pytest.approx(spread)
+    # Decided once 1.96 · spread / √n < δ − |mean| (the larger reach of the two):
+    needed = math.ceil((1.959964 * spread / (SMALLEST_EFFECT - 1 / 3)) ** 2)
+    assert pair.seeds_to_decide == needed == 14
+    assert f"{needed} seeds would decide" in pair.describe()
+    assert pair.to_json()["seeds_to_decide"] == needed
+
+
+def test_a_claim_shows_no_practical_difference_when_a_pair_does_and_none_failed():
+    means = _paper_table()
+    means["C1.3"] = [m + 10 for m in means["C1.2"]]  # beats BC by far...
+    means["C1.1"] = [m - 0.1 + 0.05 * i for i, m in enumerate(means["C1.3"])]  # ...ties the expert
+    checks = {c.claim.name: c for c in check_claims(_table(means))}
+    verdicts = [c.verdict for c in checks["rs_gail"].comparisons]
+    assert verdicts[:2] == [NO_DIFFERENCE, HELD]
+    assert checks["rs_gail"].verdict == NO_DIFFERENCE
+
+
+def test_each_pair_states_its_head_room_to_the_ceiling_and_the_papers():
+    pair = next(c for c in check_claims(_table(_paper_table())) if c.claim.name == "rs_gail")
+    expert = pair.comparisons[0]  # C1.3 against the efficient expert C1.1
+    assert expert.worse == "C1.1"
+    assert expert.headroom == pytest.approx(CEILING - expert.worse_reward)
+    assert expert.paper_headroom == pytest.approx(CEILING - PAPER["C1.1"]["reward"][0])
+    assert f"head-room {expert.headroom:.2f} (paper's: {expert.paper_headroom:.2f})" in (
+        expert.describe()
+    )
 
 
 @pytest.mark.parametrize(
@@ -262,7 +305,12 @@ def test_one_training_seed_decides_only_beyond_the_training_noise():
         return pair.verdict, check
 
     small, check = verdict(20.8, 20.0)  # +0.8 at many standard errors: not evidence
-    assert small == INCONCLUSIVE
+    assert small == INCONCLUSIVE  # nor equivalence: the training noise (±9.5) exceeds δ
+    # The seeds that would decide it at the training noise of two rows, √2 × 3.36:
+    spread = TRAINING_SPREAD * math.sqrt(2)
+    assert check.comparisons[0].seeds_to_decide == math.ceil(
+        (1.959964 * spread / (SMALLEST_EFFECT - 0.8)) ** 2
+    )
     assert check.basis.startswith(ONE_SEED)
     assert check.comparisons[0].difference.over == EPISODES
     assert check.comparisons[0].margin == 9.5

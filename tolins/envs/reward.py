@@ -30,9 +30,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.geometry.specs import CircularSocket, SocketSpec, inradius, polygon_vertices
 from tolins.geometry.tolerance import contains, pin_gaps
-from tolins.paper import COLLISION_REWARD, SUCCESS_REWARD
+from tolins.paper import A_MAX, COLLISION_REWARD, CONTROL_DT, HORIZON, SUCCESS_REWARD
 
 REWARD_MODES = ("sparse", "dense", "normalized_dense")
 #: Distance (mm) and height (mm) at which the approach and height terms saturate.
@@ -172,3 +173,28 @@ def reward_terms(
     scaled = {f.name: getattr(terms, f.name) / span for f in fields(terms)}
     scaled["offset"] = -low / span
     return RewardTerms(**scaled)
+
+
+def sparse_return_ceiling(
+    initial_pose: InitialPoseDistribution | None = None,
+    success_depth: float = 1.0,
+    horizon: int = HORIZON,
+) -> float:
+    """The most sparse return a policy can expect from ``initial_pose``'s starts: success
+    in the fewest control steps a full-speed descent takes, ``ceil((z0 + success_depth) /
+    (a_max,z · dt))``, and no collision; the mean over the start height ``z0`` (uniform in
+    ``[z_min, z_max]``), exact. The horizontal and theta offsets are covered while
+    descending (at the default distribution's largest, 3 mm and 0.1 rad, in 5 and 4 steps
+    of the 28 or more the descent takes)."""
+    distribution = initial_pose or InitialPoseDistribution()
+    per_step = float(A_MAX[3]) * CONTROL_DT
+    low, high = distribution.z_min + success_depth, distribution.z_max + success_depth
+    first, last = int(np.ceil(low / per_step)), int(np.ceil(high / per_step))
+    if high == low:
+        weights = {first: 1.0}
+    else:  # k steps for the heights in ((k - 1) · per_step, k · per_step]
+        weights = {
+            k: (min(k * per_step, high) - max((k - 1) * per_step, low)) / (high - low)
+            for k in range(first, last + 1)
+        }
+    return float(sum(w * SUCCESS_REWARD * max(1 - k / horizon, 0.0) for k, w in weights.items()))

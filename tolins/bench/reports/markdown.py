@@ -63,7 +63,9 @@ def format_claims(claims: list[ClaimCheck]) -> str:
     lines = []
     for check in claims:
         evidence = "; ".join(c.describe() for c in check.comparisons)
-        line = f"- **{check.claim.statement}: {check.verdict}** ({check.basis})."
+        needs = f"; {check.seeds_to_decide} seeds would decide" if check.seeds_to_decide else ""
+        basis = f"{check.basis}; δ = {check.claim.delta:g} reward{needs}"
+        line = f"- **{check.claim.statement}: {check.verdict}** ({basis})."
         lines.append(f"{line} {evidence}" if evidence else line)
     return "\n".join(lines)
 

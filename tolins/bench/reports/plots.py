@@ -89,14 +89,19 @@ def _error_bar(entry: dict[str, Any], figure: str) -> tuple[float, float]:
 
 def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]]) -> Path:
     """rliable-style interval plot of one claim (a :class:`tolins.bench.table.claims.ClaimCheck`):
-    each row's mean reward, each pair's difference and P(better > worse), as 95 % CIs
-    (bars) around point estimates (ticks)."""
+    each row's mean reward, each pair's difference (with the claim's ``±δ`` band) and
+    P(better > worse), as 95 % CIs (bars) around point estimates (ticks)."""
     plt = pyplot()
     pairs = check.comparisons
     rows = list(dict.fromkeys(row for c in pairs for row in (c.better, c.worse)))
     height = 1.5 + 0.42 * max(len(rows), len(pairs))
     figure, axes = plt.subplots(1, 3, figsize=(13, height), constrained_layout=True)
-    colours = {"held": "tab:green", "did not hold": "tab:red", "inconclusive": "tab:grey"}
+    colours = {
+        "held": "tab:green",
+        "did not hold": "tab:red",
+        "no practical difference": "tab:purple",
+        "inconclusive": "tab:grey",
+    }
     row_bars = [(r, results[r]["reward_mean"], *results[r]["reward_ci"], "tab:blue") for r in rows]
     difference = [
         (
@@ -123,6 +128,10 @@ def plot_claim(path: str | Path, check: Any, results: dict[str, dict[str, Any]])
         (difference, "difference of mean reward", 0.0),
         (improvement, "probability of improvement", 0.5),
     )
+    delta = check.claim.delta  # inside ±δ: no practical difference
+    axes[1].axvspan(-delta, delta, color="tab:purple", alpha=0.08, lw=0)
+    axes[1].axvline(-delta, color="tab:purple", lw=0.8, ls=":")
+    axes[1].axvline(delta, color="tab:purple", lw=0.8, ls=":")
     for i, pair in enumerate(pairs):  # one training seed: the margin a CI must clear
         if pair.margin:
             axes[1].barh(i, 2 * pair.margin, 0.95, left=-pair.margin, color="grey", alpha=0.15)

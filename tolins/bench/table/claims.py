@@ -1,4 +1,4 @@
-"""The paper's four claims, checked against a run's ``results.json`` with interval estimates.
+"""The paper's claims, checked against a run's ``results.json`` with interval estimates.
 
 Each claim is a set of pairs ``(better, worse)`` of rows. A pair's evidence is the
 difference of mean reward with its 95 % stratified-bootstrap CI and rliable's probability
@@ -8,35 +8,61 @@ evaluation episodes (seed ``s`` of every row starts from the same initial poses,
 of seed ``s`` is trained on π_n of seed ``s``), so the difference is *paired*: the
 bootstrap resamples the per-seed differences.
 
-Verdicts are three-valued. A pair *held* when its CI lies above 0, *did not hold* when it
-lies below, and is *inconclusive* when it contains 0. With one training seed the CI is over
-evaluation episodes and decides only beyond ± :func:`~tolins.bench.table.statistics.margin`
-(the training noise it cannot see, :func:`~tolins.bench.table.statistics.one_seed_margin`; see
-:mod:`tolins.bench.table.statistics`). A claim is the conjunction of its
-pairs: held when every pair held, did not hold when any did not, inconclusive otherwise;
-*not evaluated* when a row is missing.
+Verdicts are four-valued, against each claim's smallest effect of interest ``δ``
+(:attr:`Claim.delta`, written down before the run: docs/results.md). A pair *held* when
+its CI lies above 0, *did not hold* when it lies below, shows *no practical difference*
+when its CI lies inside ``[-δ, +δ]`` (an equivalence test over training seeds, TOST-style:
+:func:`~tolins.bench.table.statistics.equivalent`), and is *inconclusive* otherwise; an
+undecided pair states the training seeds that would decide it at the spread observed
+(:func:`~tolins.bench.table.statistics.seeds_to_decide`). With one training seed the CI is
+over evaluation episodes and decides only beyond ± :func:`~tolins.bench.table.statistics.margin`
+(the training noise it cannot see, :func:`~tolins.bench.table.statistics.one_seed_margin`),
+which is wider than ``δ``: one seed never shows equivalence. A claim is the conjunction of
+its pairs: it did not hold when any pair did not, shows no practical difference when,
+otherwise, any pair does (the claim cannot hold by ``δ`` there), is inconclusive when,
+otherwise, any pair is, and held when every pair held; *not evaluated* when a row is
+missing.
+
+Each pair also states its **head-room**: how far the worse row's reward lies below
+:func:`~tolins.envs.reward.sparse_return_ceiling`, the most any policy can expect, and the
+same for the paper's figures where the paper has the row: a claim against a demonstrator
+near the ceiling (ours) has less room to hold than against the paper's.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
-from tolins.bench.table.rows import ROWS
+import numpy as np
+
+from tolins.bench.table.rows import PAPER, ROWS
 from tolins.bench.table.statistics import (
     EPISODES,
+    TRAINING_SPREAD,
     Interval,
     difference,
+    equivalent,
     margin,
     probability_of_improvement,
+    seeds_to_decide,
     sign,
     unit_samples,
 )
+from tolins.envs.reward import sparse_return_ceiling
 
 HELD, NOT_HELD, NOT_EVALUATED = "held", "did not hold", "not evaluated"
-INCONCLUSIVE = "inconclusive"
+INCONCLUSIVE, NO_DIFFERENCE = "inconclusive", "no practical difference"
+#: A claim's verdict from its pairs': the first of these any pair has, else held.
+_PRECEDENCE = (NOT_HELD, NO_DIFFERENCE, INCONCLUSIVE)
 ONE_SEED = "one training seed: training variance not measured"
-_VERDICTS = {1: HELD, -1: NOT_HELD, 0: INCONCLUSIVE}
+_VERDICTS = {1: HELD, -1: NOT_HELD}
+#: The smallest effect of interest of every claim (reward): one control step of 40 saved
+#: on a successful insertion (c / k_max = 100 / 40), or 2.5 collisions.
+SMALLEST_EFFECT = 2.5
+#: The most sparse return a policy can expect on the bench's start poses (26.72).
+CEILING = sparse_return_ceiling()
 
 
 @dataclass(frozen=True)
@@ -45,12 +71,15 @@ class Claim:
 
     ``equal_budgets``: the claim is about equal env-step budgets (RS-GAIL against deep RL),
     so it is not evaluated on a profile that gives the two sides different budgets.
+    ``delta``: its smallest effect of interest (reward): a difference inside ``±delta`` is
+    no practical difference.
     """
 
     name: str
     statement: str
     pairs: tuple[tuple[str, str], ...]
     equal_budgets: bool = False
+    delta: float = SMALLEST_EFFECT
 
 
 CLAIMS: tuple[Claim, ...] = (
@@ -88,7 +117,9 @@ CLAIMS: tuple[Claim, ...] = (
 @dataclass(frozen=True)
 class Comparison:
     """One pair of rows: the difference of mean reward and P(better > worse), each with
-    its 95 % CI."""
+    its 95 % CI; ``margin``: the one-seed rule's; ``delta``: the claim's smallest effect of
+    interest; ``spread``: the std of one training seed's difference (measured over seeds,
+    else the training noise one seed cannot show; ``None`` for two expert rows)."""
 
     better: str
     worse: str
@@ -97,19 +128,50 @@ class Comparison:
     difference: Interval
     improvement: Interval
     margin: float = 0.0
+    delta: float = SMALLEST_EFFECT
+    spread: float | None = None
 
     @property
     def verdict(self) -> str:
-        """:data:`HELD`, :data:`NOT_HELD` or :data:`INCONCLUSIVE`: the CI of the difference
-        above ``margin``, below ``-margin``, or neither."""
-        return _VERDICTS[sign(self.difference, self.margin)]
+        """:data:`HELD` or :data:`NOT_HELD` (the CI beyond ``±margin``), else
+        :data:`NO_DIFFERENCE` (inside ``±(delta − margin)``), else :data:`INCONCLUSIVE`."""
+        decided = sign(self.difference, self.margin)
+        if decided:
+            return _VERDICTS[decided]
+        if equivalent(self.difference, self.delta, self.margin):
+            return NO_DIFFERENCE
+        return INCONCLUSIVE
+
+    @property
+    def seeds_to_decide(self) -> int | None:
+        """Training seeds that would decide an inconclusive pair at the observed spread."""
+        if self.verdict != INCONCLUSIVE or self.spread is None:
+            return None
+        return seeds_to_decide(self.difference.estimate, self.spread, self.delta)
+
+    @property
+    def headroom(self) -> float:
+        """How far the worse row's reward lies below :data:`CEILING`."""
+        return CEILING - self.worse_reward
+
+    @property
+    def paper_headroom(self) -> float | None:
+        """The same for the paper's figure of the worse row, if the paper has it."""
+        paper = PAPER.get(self.worse)
+        return None if paper is None else CEILING - paper["reward"][0]
 
     def describe(self) -> str:
         beyond = f" (decisive beyond ±{self.margin:.1f})" if self.margin else ""
+        seeds = self.seeds_to_decide
+        needs = f", {seeds} seeds would decide" if seeds is not None else ""
+        room = f"; head-room {self.headroom:.2f}"
+        if self.paper_headroom is not None:
+            room += f" (paper's: {self.paper_headroom:.2f})"
         return (
             f"{self.better} {self.better_reward:.2f} vs {self.worse} {self.worse_reward:.2f}: "
             f"{self.difference.format(signed=True)}{beyond}, "
-            f"P({self.better} > {self.worse}) {self.improvement.format()}: {self.verdict}"
+            f"P({self.better} > {self.worse}) {self.improvement.format()}: "
+            f"{self.verdict}{needs}{room}"
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -119,14 +181,19 @@ class Comparison:
             "difference": self.difference.to_json(),
             "probability_of_improvement": self.improvement.to_json(),
             "margin": self.margin,
+            "delta": self.delta,
+            "spread": self.spread,
             "verdict": self.verdict,
+            "seeds_to_decide": self.seeds_to_decide,
+            "headroom": self.headroom,
+            "paper_headroom": self.paper_headroom,
         }
 
 
 @dataclass(frozen=True)
 class ClaimCheck:
-    """A claim's verdict (:data:`HELD`, :data:`NOT_HELD`, :data:`INCONCLUSIVE`,
-    :data:`NOT_EVALUATED`), its pairs and what the intervals are over."""
+    """A claim's verdict (:data:`HELD`, :data:`NOT_HELD`, :data:`NO_DIFFERENCE`,
+    :data:`INCONCLUSIVE`, :data:`NOT_EVALUATED`), its pairs and what the intervals are over."""
 
     claim: Claim
     verdict: str
@@ -150,12 +217,20 @@ class ClaimCheck:
             )
         return f"{self.seeds} training seeds; 95 % CIs over seeds"
 
+    @property
+    def seeds_to_decide(self) -> int | None:
+        """Training seeds that would decide every inconclusive pair (``None``: none is)."""
+        needed = [c.seeds_to_decide for c in self.comparisons if c.seeds_to_decide is not None]
+        return max(needed) if needed and self.verdict == INCONCLUSIVE else None
+
     def to_json(self) -> dict[str, Any]:
         return {
             "statement": self.claim.statement,
             "verdict": self.verdict,
             "basis": self.basis,
             "seeds": self.seeds,
+            "delta": self.claim.delta,
+            "seeds_to_decide": self.seeds_to_decide,
             "evidence": [c.describe() for c in self.comparisons],
             "comparisons": [c.to_json() for c in self.comparisons],
         }
@@ -173,9 +248,11 @@ def check_claims(
         if any(row not in results for pair in claim.pairs for row in pair):
             checks.append(ClaimCheck(claim, NOT_EVALUATED, ()))
             continue
-        comparisons = tuple(_compare(results, better, worse) for better, worse in claim.pairs)
+        comparisons = tuple(
+            _compare(results, better, worse, claim.delta) for better, worse in claim.pairs
+        )
         verdicts = {c.verdict for c in comparisons}
-        verdict = NOT_HELD if NOT_HELD in verdicts else HELD if verdicts == {HELD} else INCONCLUSIVE
+        verdict = next((v for v in _PRECEDENCE if v in verdicts), HELD)
         seeds = min(int(results[row]["seeds"]) for pair in claim.pairs for row in pair)
         note = ""
         if claim.equal_budgets and budgets is not None and budgets[0] != budgets[1]:
@@ -191,7 +268,9 @@ def check_claims(
     return checks
 
 
-def _compare(results: dict[str, dict[str, Any]], better: str, worse: str) -> Comparison:
+def _compare(
+    results: dict[str, dict[str, Any]], better: str, worse: str, delta: float
+) -> Comparison:
     (x, over_x), (y, over_y) = unit_samples(results[better]), unit_samples(results[worse])
     over = EPISODES if EPISODES in (over_x, over_y) else over_x
     if over_x != over_y:  # one row has several seeds, the other one: compare their episodes
@@ -207,7 +286,19 @@ def _compare(results: dict[str, dict[str, Any]], better: str, worse: str) -> Com
         interval,
         probability_of_improvement(x, y, over),
         margin(interval, trained),
+        delta,
+        _spread(np.asarray(x, dtype=float), np.asarray(y, dtype=float), over, paired, trained),
     )
+
+
+def _spread(x: np.ndarray, y: np.ndarray, over: str, paired: bool, trained: int) -> float | None:
+    """The std of one training seed's difference: of the paired per-seed differences, of
+    the two rows' per-seed means, or (one seed) the training noise it cannot show."""
+    if over == EPISODES:
+        return TRAINING_SPREAD * math.sqrt(trained) if trained else None
+    if paired:
+        return float(np.std(x - y, ddof=1))
+    return float(math.sqrt(np.var(x, ddof=1) + np.var(y, ddof=1)))
 
 
 #: Rows of a scripted expert: nothing trained, so no training variance in their means.

@@ -14,7 +14,9 @@ whose runs differ by evaluation alone).
 A row *differs* when its CI lies beyond that margin (A higher or B higher) and is
 *consistent* otherwise: no difference was detected at that resolution, which is what a
 reproduction can show. A row is *not comparable* when its eval env differs between A and
-B (its workpiece: the ``-v1`` and ``-v2`` ids of one preset compare), or the runs' backend
+B (its workpiece: the ``-v1`` and ``-v2`` ids of one preset compare), its policy does (the
+R1 rows of schemas /1 and /2 learnt from the dense reward, today's from the sparse one:
+"PPO" against "PPO (sparse)"), or the runs' backend
 or profile do (a field a run does not state, such as the profile
 of ``tolins evaluate --out``, is not held against it): its interval is still given.
 """
@@ -141,7 +143,7 @@ def _not_comparable(
         env if env is None else env_label(str(env))
         for env in (row_a.get("eval_env"), row_b.get("eval_env"))
     ]
-    pairs = [("eval env", *envs)]
+    pairs = [("eval env", *envs), ("policy", row_a.get("policy"), row_b.get("policy"))]
     pairs += [(key, a.get(key), b.get(key)) for key in ("backend", "profile")]
     differ = [f"{key} {x} vs {y}" for key, x, y in pairs if None not in (x, y) and x != y]
     return ", ".join(differ) or None

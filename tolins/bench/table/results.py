@@ -19,10 +19,13 @@ from tolins.rollouts.episodes import Episode
 from tolins.rollouts.forces import FORCE_FIGURES
 
 FIGURES = ("reward", "success", "steps", "collisions")
-#: The version of ``results.json``'s layout, its ``schema`` field (/2: the force figures).
-SCHEMA = "tolins.results/2"
-#: The schemas :func:`read_results` reads (/1 has no force figures).
-READABLE = ("tolins.results/1", SCHEMA)
+#: The version of ``results.json``'s layout, its ``schema`` field (/2: the force figures;
+#: /3: four-valued claims with their smallest effect of interest, seeds to decide and
+#: head-room, and the deep-RL rows R1 on the sparse reward, R2 on the dense one).
+SCHEMA = "tolins.results/3"
+#: The schemas :func:`read_results` reads (/1 has no force figures; in /1 and /2 the rows
+#: R1.x learnt from the dense reward).
+READABLE = ("tolins.results/1", "tolins.results/2", SCHEMA)
 #: The values a figure of one episode can take (and so its means, CIs and per-seed
 #: values): a success is 0 or 1, steps, collisions and the force figures are counts or
 #: magnitudes, a reward may be negative.

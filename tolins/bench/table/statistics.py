@@ -234,6 +234,31 @@ def sign(interval: Interval, margin_: float = 0.0) -> int:
     return 0
 
 
+def equivalent(interval: Interval, delta: float, margin_: float = 0.0) -> bool:
+    """Whether the CI lies inside ``[-delta + margin_, delta - margin_]``: the difference is
+    smaller than ``delta`` either way (two one-sided tests, each at 2.5 % — the 95 % CI
+    inside the bounds; stricter than TOST's usual 90 % CI). With one training seed the
+    bounds shrink by the training noise ``margin_``, so no one-seed CI is inside ``±delta``
+    when ``margin_ ≥ delta``."""
+    bound = delta - margin_
+    return bound > 0 and -bound <= interval.low and interval.high <= bound
+
+
+def seeds_to_decide(estimate: float, spread: float, delta: float) -> int:
+    """The training seeds at which a difference of ``estimate`` with a std ``spread`` over
+    seeds (of a seed's difference) would be decided: its 95 % CI (normal approximation of
+    the bootstrap's, ``± 1.96 · spread / √n``) narrower than ``|estimate|`` (held or did
+    not hold) or than ``delta − |estimate|`` (no practical difference); at least 2."""
+    reach = max(abs(estimate), delta - abs(estimate))
+    if spread <= 0:
+        return 2
+    return max(2, math.ceil((_Z * spread / reach) ** 2))
+
+
+#: The 97.5 % quantile of the normal distribution (a 95 % two-sided interval).
+_Z = 1.959963984540054
+
+
 def unit_samples(entry: dict[str, Any], figure: str = "reward") -> tuple[np.ndarray, str]:
     """The samples of a ``results.json`` entry's ``figure`` on the unit, and which unit:
     the per-seed means (``{figure}_per_seed``) with ≥ 2 training seeds, else the one seed's

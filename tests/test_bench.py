@@ -159,6 +159,14 @@ def _check_outputs(out: Path, backend: str) -> dict:
     assert set(METHODS) == set(study["methods"])
     markdown = (out / "results.md").read_text()
     assert all(f"| {row_id} |" in markdown for row_id in ALL_ROW_IDS)
+    # the deep-RL section: every baseline's and π_n's curve, in curves.json too
+    curves = json.loads((out / "curves.json").read_text())
+    baselines = [t for t in TRAININGS.values() if t.method in ("ppo", "sac")]
+    assert {f"{t.name}-seed0" for t in baselines} <= set(curves)
+    assert "| training | reward learnt from | env steps |" in markdown
+    for training in baselines:
+        assert f"| {training.name} | {training.reward_mode} |" in markdown
+    assert "| pi_n_safe | sparse + discriminator (RS-GAIL) |" in markdown
     assert "## The paper's claims in this run" in markdown
     for name in ("table", "learning_curves", "env_step_curves", "trajectories", "tolerance_images"):
         assert (out / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -317,3 +317,8 @@ def test_a_bench_run_shows_one_bar_over_its_stages(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "0/1 stages, evaluation eval-C2.1-seed0" in err and "1/1 stages" in err, err
     assert "evaluate:" not in err
+    # no deep-RL row ran: results.md says where they are
+    markdown = (out / "results.md").read_text()
+    assert "## Deep RL from scratch against RS-GAIL at equal env steps" in markdown
+    assert "This run has no deep-RL row (`--rows`)" in markdown and "`reference:paper`" in markdown
+    assert json.loads((out / "curves.json").read_text()) == {}

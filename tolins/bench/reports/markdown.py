@@ -6,10 +6,13 @@ from __future__ import annotations
 import datetime
 from typing import TYPE_CHECKING, Any
 
+from tolins.bench.reference import PREFIX, reference_path
 from tolins.bench.reports.robustness import format_section
-from tolins.bench.table.claims import ClaimCheck
+from tolins.bench.table.baselines import CurveSummary, summarise_curves
+from tolins.bench.table.claims import CEILING, SMALLEST_EFFECT, ClaimCheck
 from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
-from tolins.bench.table.rows import PAPER
+from tolins.bench.table.results import read_results
+from tolins.bench.table.rows import BASELINE_ROWS, PAPER, TRAININGS
 from tolins.bench.table.seeds import FIRST_SEED
 from tolins.bench.table.statistics import one_seed_margin
 from tolins.envs.tasks import env_label
@@ -93,8 +96,73 @@ def format_backends(
     return "\n".join(lines)
 
 
-def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = None) -> str:
-    """``results.md``: the table beside the paper, the claims, the study, the figures."""
+def format_curve_summaries(summaries: list[CurveSummary]) -> str:
+    """Each training's learning curve in a line: where each seed's success left 0, and
+    the last point, so that RS-GAIL and the baselines compare at equal env steps."""
+    lines = [
+        "| training | reward learnt from | env steps | success > 0 from (per seed) "
+        "| last reward | last success |",
+        "|---|---|--:|---|--:|--:|",
+    ]
+    for summary in summaries:
+        reward = TRAININGS[summary.training].reward_mode or "sparse + discriminator (RS-GAIL)"
+        firsts = ", ".join("never" if f is None else f"{f:,.0f}" for f in summary.first_success)
+        lines.append(
+            f"| {summary.training} | {reward} | {summary.env_steps:,.0f} | {firsts} "
+            f"| {summary.last_reward:.2f} | {summary.last_success:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+def _baselines_section(run: BenchRun, curves: dict[str, Any]) -> list[str]:
+    """``results.md``'s deep-RL section: this run's curves at equal env steps, or, when the
+    profile trains no baseline, their rows from ``reference:paper``."""
+    heading = ["## Deep RL from scratch against RS-GAIL at equal env steps", ""]
+    ids = [row.id for row in BASELINE_ROWS]
+    if any(row_id in run.results for row_id in ids):
+        return [
+            *heading,
+            "R1.x learn from the paper's sparse reward (what its claim is about), R2.x from "
+            "the dense one (tolins.envs.reward); every row is evaluated on the sparse reward. "
+            "Their curves (deterministic policy, sparse reward) beside RS-GAIL's π_n:",
+            "",
+            format_curve_summaries(summarise_curves(curves)),
+            "",
+            "![RS-GAIL against PPO and SAC at equal env steps](env_step_curves.png)",
+            "",
+        ]
+    lead = (
+        f"The {run.config.profile} profile trains no deep-RL baseline (at its budgets their "
+        "curves on the sparse reward stay at 0)"
+        if not run.profile.baselines
+        else "This run has no deep-RL row (`--rows`)"
+    )
+    document = read_results(reference_path("paper"))
+    shipped = {row_id: document["rows"][row_id] for row_id in ids if row_id in document["rows"]}
+    if not shipped or document.get("schema") != "tolins.results/3":
+        note = (
+            f"{lead}, and `{PREFIX}paper` ({document.get('date')}) holds none of today's "
+            "R rows yet (R1.x on the sparse reward, R2.x on the dense one)."
+        )
+        return [*heading, note, ""]
+    seeds = next(iter(shipped.values()))["seeds"]
+    return [
+        *heading,
+        f"{lead}; these rows are `{PREFIX}paper`'s ({document['date']}, {seeds} training "
+        f"seeds, tolins {document['tolins_version']}):",
+        "",
+        format_results_table(shipped),
+        "",
+    ]
+
+
+def format_markdown(
+    run: BenchRun,
+    other: tuple[str, dict[str, Any]] | None = None,
+    curves: dict[str, Any] | None = None,
+) -> str:
+    """``results.md``: the table beside the paper, the claims, the deep-RL curves, the
+    study, the figures (``curves``: the env-step curves of the run's stages)."""
     config = run.config
     seeds = run.results[next(iter(run.results))]["seeds"] if run.results else 0
     episodes = run.profile.eval_episodes
@@ -122,6 +190,8 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         format_claims(run.claims),
         "",
         *(f"![{c.claim.name}](claims/{c.claim.name}.png)" for c in run.claims if c.comparisons),
+        "",
+        *_baselines_section(run, curves or {}),
     ]
     if run.study is not None:
         from tolins.inference.report import format_markdown as format_study
@@ -146,8 +216,9 @@ def format_markdown(run: BenchRun, other: tuple[str, dict[str, Any]] | None = No
         "## Figures and recordings",
         "",
         "- `learning_curves.png`: RS-GAIL's curves of every trained policy.",
-        "- `env_step_curves.png`: sparse reward against env steps of RS-GAIL's π_n and "
-        "the deep-RL baselines (PPO, SAC; rows R1.x).",
+        "- `env_step_curves.png`: sparse reward and success against env steps of RS-GAIL's "
+        "π_n and the deep-RL baselines (PPO, SAC; rows R1.x and R2.x); `curves.json`: "
+        "their points.",
         "- `trajectories.png`: π_n's trajectories over training (the paper's Fig. 4a).",
         "- `tolerance_images.png`: the tolerance images of the workpieces.",
         "- `force_profiles/{ID}.png`: each row's normal force against insertion depth over "
@@ -168,11 +239,18 @@ def _force_section(results: dict[str, dict[str, Any]]) -> list[str]:
 _VERDICT_RULE = (
     "Each pair: the difference of mean reward [its 95 % stratified-bootstrap CI] and "
     "P(better > worse) [95 % CI] (rliable). *held*: the CI of the difference lies above 0; "
-    "*did not hold*: below 0; *inconclusive*: it contains 0. With one training seed the CIs "
-    "are over episodes and decide only beyond the training noise they cannot show "
-    f"(±{one_seed_margin(2)} reward for two trained rows, ±{one_seed_margin(1)} for a "
-    "trained row against an expert). A claim holds when every pair held and does not when "
-    "any did not."
+    "*did not hold*: below 0; *no practical difference*: inside [−δ, +δ], the claim's "
+    f"smallest effect of interest (δ = {SMALLEST_EFFECT:g} reward: one control step of 40 "
+    "saved on a successful insertion; an equivalence test, TOST-style); *inconclusive*: "
+    "otherwise, with the training seeds that would decide it at the spread observed. With "
+    "one training seed the CIs are over episodes and decide only beyond the training noise "
+    f"they cannot show (±{one_seed_margin(2)} reward for two trained rows, "
+    f"±{one_seed_margin(1)} for a trained row against an expert), which also rules out "
+    "equivalence. A claim did not hold when any pair did not, shows no practical difference "
+    "when (otherwise) any pair does, is inconclusive when any pair is, and held when every "
+    f"pair held. Head-room: the sparse-return ceiling ({CEILING:.2f}: success in the fewest "
+    "steps a full-speed descent takes, no collision) minus the worse row's reward, ours and "
+    "the paper's: a claim against a demonstrator near the ceiling has less room to hold."
 )
 
 

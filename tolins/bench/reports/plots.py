@@ -180,7 +180,8 @@ def plot_learning_curves(path: str | Path, curves: dict[str, list[dict[str, floa
 def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarray]]) -> Path:
     """Sparse reward and success rate against env steps, one line per training stage
     (RS-GAIL's π_n and the deep-RL baselines, :func:`tolins.bench.table.baselines.env_step_curves`):
-    one colour and legend entry per training, one line per seed."""
+    one colour and legend entry per training, one line per seed (baselines on the sparse
+    reward dotted, on the dense one dashed)."""
     plt = pyplot()
     figure, axes = plt.subplots(1, 2, figsize=(12, 3.8), constrained_layout=True)
     colours: dict[str, str] = {}
@@ -188,7 +189,12 @@ def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarra
         training = stage.rsplit("-seed", 1)[0]
         first = training not in colours
         colours.setdefault(training, f"C{len(colours) % 10}")
-        style = {"ls": "--"} if training.startswith(("ppo", "sac")) else {}
+        # RS-GAIL solid, baselines on the sparse reward dotted, on the dense one dashed
+        style = (
+            {"ls": ":" if training.endswith("_sparse") else "--"}
+            if training.startswith(("ppo", "sac"))
+            else {}
+        )
         for axis, key in zip(axes, ("reward", "success"), strict=True):
             axis.plot(
                 curve["env_steps"],

@@ -15,6 +15,7 @@ from tolins.bench.reports.figures import write_figures
 from tolins.bench.reports.markdown import format_markdown
 from tolins.bench.reports.robustness import plot_robustness
 from tolins.bench.store.integrity import StageFileError
+from tolins.bench.table.baselines import curves_json, env_step_curves
 from tolins.bench.table.results import read_results, results_document
 from tolins.bench.table.robustness import KEY
 from tolins.bench.table.rows import ALL_ROWS
@@ -50,8 +51,10 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
     else:  # an earlier run's table would read as this run's
         (out / "robustness.png").unlink(missing_ok=True)
     written += write_figures(run, out)
+    curves = env_step_curves(run.stage_folders)
+    written.append(atomic_json(out / "curves.json", curves_json(curves)))
     written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
-    text = format_markdown(run, _other_backend(out, backend))
+    text = format_markdown(run, _other_backend(out, backend), curves)
     written.append(atomic_write(out / "results.md", lambda file: file.write(text), mode="w"))
     return written
 

@@ -12,7 +12,10 @@ expert steps are not counted either.
 from __future__ import annotations
 
 import csv
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -51,3 +54,57 @@ def env_step_curves(stage_folders: dict[str, Path]) -> dict[str, Curve]:
             "success": np.array([row["success"] for row in rows]),
         }
     return curves
+
+
+def curves_json(curves: Mapping[str, Curve]) -> dict[str, dict[str, list[float]]]:
+    """``curves`` as JSON (``curves.json`` of a run): stage → column → values."""
+    return {
+        stage: {key: [float(v) for v in values] for key, values in curve.items()}
+        for stage, curve in curves.items()
+    }
+
+
+def curves_from_json(document: Mapping[str, Any]) -> dict[str, Curve]:
+    """The curves of a ``curves.json`` document (:func:`curves_json`)."""
+    return {
+        stage: {key: np.asarray(values, dtype=float) for key, values in curve.items()}
+        for stage, curve in document.items()
+    }
+
+
+def first_success(curve: Curve) -> float | None:
+    """The env steps of the curve's first point whose success rate is above 0 (``None``:
+    it never leaves zero)."""
+    above = np.flatnonzero(curve["success"] > 0)
+    return float(curve["env_steps"][above[0]]) if len(above) else None
+
+
+@dataclass(frozen=True)
+class CurveSummary:
+    """One training's curves over its seeds: the env steps each seed's curve left a success
+    rate of 0 (``None``: never), and the last point's reward and success, mean over seeds."""
+
+    training: str
+    env_steps: float
+    first_success: tuple[float | None, ...]
+    last_reward: float
+    last_success: float
+
+
+def summarise_curves(curves: Mapping[str, Curve]) -> list[CurveSummary]:
+    """:class:`CurveSummary` of each training in ``curves`` (stage name → curve), in
+    :data:`~tolins.bench.table.rows.TRAININGS` order."""
+    by_training: dict[str, list[Curve]] = {}
+    for stage, curve in sorted(curves.items()):
+        by_training.setdefault(stage.rsplit("-seed", 1)[0], []).append(curve)
+    return [
+        CurveSummary(
+            name,
+            float(np.mean([c["env_steps"][-1] for c in seeds])),
+            tuple(first_success(c) for c in seeds),
+            float(np.mean([c["reward"][-1] for c in seeds])),
+            float(np.mean([c["success"][-1] for c in seeds])),
+        )
+        for name in TRAININGS
+        if (seeds := by_training.get(name))
+    ]

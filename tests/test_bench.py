@@ -163,9 +163,12 @@ def _check_outputs(out: Path, backend: str) -> dict:
     curves = json.loads((out / "curves.json").read_text())
     baselines = [t for t in TRAININGS.values() if t.method in ("ppo", "sac")]
     assert {f"{t.name}-seed0" for t in baselines} <= set(curves)
-    assert "| training | reward learnt from | env steps |" in markdown
+    assert "| training | reward learnt from | settings | env steps |" in markdown
     for training in baselines:
-        assert f"| {training.name} | {training.reward_mode} |" in markdown
+        assert f"| {training.name} | {training.reward_mode} | {training.method.upper()}, " in (
+            markdown
+        )
+    assert "n_steps 256, n_envs 8 |" in markdown  # PPO keeps SB3's rollout of 2,048
     assert "| pi_n_safe | sparse + discriminator (RS-GAIL) |" in markdown
     assert "## The paper's claims in this run" in markdown
     for name in ("table", "learning_curves", "env_step_curves", "trajectories", "tolerance_images"):

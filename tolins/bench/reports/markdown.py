@@ -12,7 +12,7 @@ from tolins.bench.table.baselines import CurveSummary, summarise_curves
 from tolins.bench.table.claims import CEILING, SMALLEST_EFFECT, ClaimCheck
 from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
 from tolins.bench.table.results import read_results
-from tolins.bench.table.rows import BASELINE_ROWS, PAPER, TRAININGS
+from tolins.bench.table.rows import BASELINE_ROWS, PAPER, SB3_METHODS, TRAININGS
 from tolins.bench.table.seeds import FIRST_SEED
 from tolins.bench.table.statistics import one_seed_margin
 from tolins.envs.tasks import env_label
@@ -96,22 +96,41 @@ def format_backends(
     return "\n".join(lines)
 
 
-def format_curve_summaries(summaries: list[CurveSummary]) -> str:
+def format_curve_summaries(summaries: list[CurveSummary], settings: dict[str, str]) -> str:
     """Each training's learning curve in a line: where each seed's success left 0, and
-    the last point, so that RS-GAIL and the baselines compare at equal env steps."""
+    the last point, so that RS-GAIL and the baselines compare at equal env steps
+    (``settings``: training name → how it was trained)."""
     lines = [
-        "| training | reward learnt from | env steps | success > 0 from (per seed) "
+        "| training | reward learnt from | settings | env steps | success > 0 from (per seed) "
         "| last reward | last success |",
-        "|---|---|--:|---|--:|--:|",
+        "|---|---|---|--:|---|--:|--:|",
     ]
     for summary in summaries:
         reward = TRAININGS[summary.training].reward_mode or "sparse + discriminator (RS-GAIL)"
         firsts = ", ".join("never" if f is None else f"{f:,.0f}" for f in summary.first_success)
         lines.append(
-            f"| {summary.training} | {reward} | {summary.env_steps:,.0f} | {firsts} "
+            f"| {summary.training} | {reward} | {settings.get(summary.training, '–')} "
+            f"| {summary.env_steps:,.0f} | {firsts} "
             f"| {summary.last_reward:.2f} | {summary.last_success:.2f} |"
         )
     return "\n".join(lines)
+
+
+def _training_settings(run: BenchRun) -> dict[str, str]:
+    """How each RS-GAIL π_n and deep-RL training of ``run`` was trained, in a line."""
+    profile, backend = run.profile, run.config.backend
+    settings = {}
+    for training in TRAININGS.values():
+        if training.method in SB3_METHODS:
+            env_id, reward = training.env_ids[0], training.reward_mode
+            config = profile.sb3(training.method, env_id, backend, 0, reward)
+            settings[training.name] = config.settings()
+        elif training.method == "rs-gail":
+            settings[training.name] = (
+                f"RS-GAIL from BC: {profile.nominal_iterations} iterations of "
+                f"{profile.iteration_episodes} episodes"
+            )
+    return settings
 
 
 def _baselines_section(run: BenchRun, curves: dict[str, Any]) -> list[str]:
@@ -126,7 +145,7 @@ def _baselines_section(run: BenchRun, curves: dict[str, Any]) -> list[str]:
             "the dense one (tolins.envs.reward); every row is evaluated on the sparse reward. "
             "Their curves (deterministic policy, sparse reward) beside RS-GAIL's π_n:",
             "",
-            format_curve_summaries(summarise_curves(curves)),
+            format_curve_summaries(summarise_curves(curves), _training_settings(run)),
             "",
             "![RS-GAIL against PPO and SAC at equal env steps](env_step_curves.png)",
             "",

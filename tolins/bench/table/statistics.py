@@ -9,9 +9,11 @@ per-seed means, resampled by rliable's stratified bootstrap
 replications, 95 %). With one training seed the samples are the evaluation episodes
 (``over == "episodes"``), and the interval says nothing about training variance.
 
-Verdicts (:func:`sign`) are three-valued: an interval above 0 is positive, below 0
-negative, one that contains 0 undecided. **One-seed rule**: an interval over episodes
-decides only when it clears ``±`` :func:`margin` entirely, 9.5 reward
+Decisions (:func:`sign`): an interval above 0 is positive, below 0 negative, one that
+contains 0 undecided; :func:`equivalent` tells an undecided one inside a smallest effect of
+interest (the claims' four-valued verdicts, :mod:`tolins.bench.table.claims`). **One-seed
+rule**: an interval over episodes decides only when it clears ``±`` :func:`margin`
+entirely, 9.5 reward
 (:data:`ONE_SEED_MARGIN`) for two trained rows. The margin is the training noise a single
 seed cannot show: two rows whose per-seed means each spread by :data:`TRAINING_SPREAD`
 (the largest std over seeds the paper profile measured with 5 seeds, ``reference:paper``:

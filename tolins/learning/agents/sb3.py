@@ -22,7 +22,14 @@ import numpy as np
 
 from tolins.atomic import atomic_write
 from tolins.envs.wrappers import agent_env
-from tolins.learning.agents.sb3_config import ALGORITHM_NAMES, CURVES, MODEL, Sb3Config
+from tolins.learning.agents.sb3_config import (
+    ALGORITHM_NAMES,
+    CURVES,
+    HYPERPARAMETERS,
+    MODEL,
+    PPO_ROLLOUT,
+    Sb3Config,
+)
 from tolins.learning.artefacts import single_threaded_torch
 from tolins.learning.curves import write_curves_csv
 
@@ -43,14 +50,6 @@ ALGORITHMS = dict(zip(ALGORITHM_NAMES, (PPO, SAC), strict=True))
 OBSERVATION_SCALE = np.array([1.0, 1.0, 20.0, 0.1, 0.5, 0.5, 0.5, 0.5], dtype=np.float32)
 #: First seed of the learning-curve episodes (training episodes draw from the model's seed).
 CURVE_SEED = 30_000
-#: SB3's default PPO rollout (``n_steps`` on one env): the transitions of one update.
-PPO_ROLLOUT = 2048
-#: What differs from SB3's defaults, per algorithm (measured: benchmarks/README.md).
-HYPERPARAMETERS: dict[str, dict] = {
-    "ppo": {},
-    # SB3's 256×256 networks cost 4× the time per gradient step for nothing here.
-    "sac": {"policy_kwargs": {"net_arch": [64, 64]}, "learning_starts": 1000},
-}
 
 
 class ScaledObservation(BaseFeaturesExtractor):

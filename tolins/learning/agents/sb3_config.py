@@ -13,6 +13,15 @@ ALGORITHM_NAMES = ("ppo", "sac")
 MODEL = "model.zip"
 CURVES = "curves.csv"
 
+#: SB3's default PPO rollout (``n_steps`` on one env): the transitions of one update.
+PPO_ROLLOUT = 2048
+#: What differs from SB3's defaults, per algorithm (measured: benchmarks/README.md).
+HYPERPARAMETERS: dict[str, dict] = {
+    "ppo": {},
+    # SB3's 256×256 networks cost 4× the time per gradient step for nothing here.
+    "sac": {"policy_kwargs": {"net_arch": [64, 64]}, "learning_starts": 1000},
+}
+
 
 @dataclass(frozen=True)
 class Sb3Config:
@@ -50,3 +59,12 @@ class Sb3Config:
         for name in ("env_steps", "curve_every", "curve_episodes", "n_envs"):
             check_int(name, getattr(self, name), minimum=1)
         check_seed("seed", self.seed)
+
+    def settings(self) -> str:
+        """The algorithm's settings as trained, in a line (SB3's defaults but these)."""
+        changed = {**HYPERPARAMETERS[self.algorithm]}
+        if self.algorithm == "ppo":
+            changed["n_steps"] = max(PPO_ROLLOUT // self.n_envs, 1)
+        changed["n_envs"] = self.n_envs
+        shown = ", ".join(f"{key} {value}" for key, value in changed.items())
+        return f"{self.algorithm.upper()}, SB3 defaults but {shown}"

@@ -4,12 +4,15 @@ Usage::
 
     python benchmarks/sb3_baselines.py sac --backend kinematic --steps 40000 --every 5000
     python benchmarks/sb3_baselines.py ppo --backend mujoco --steps 10000 --reward sparse
+    python benchmarks/sb3_baselines.py ppo --env tolins/Circle2x2-v2 --n-envs 8 --steps 8192
 
 The same training as the bench's rows R1.x (:func:`tolins.learning.agents.sb3.train_sb3`, torch on
 one thread): the agent learns from ``--reward`` (default ``dense``); every ``--every`` env
 steps its deterministic policy is scored with the paper's sparse reward on ``--episodes``
-episodes (seeds 30000…). Each line: env steps trained, cumulative training throughput
-(env steps/s, curve episodes excluded), sparse reward, success rate, collisions.
+episodes (seeds 30000…). ``--n-envs`` steps that many training envs in one batch (PPO
+keeps SB3's 2,048 transitions per update). Each line: env steps trained, cumulative
+training throughput (env steps/s, curve episodes excluded), sparse reward, success rate,
+collisions.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=5_000)
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--n-envs", type=int, default=1, help="training envs in one batch")
     parser.add_argument("--out", default=None, help="folder for model.zip and curves.csv")
     args = parser.parse_args()
     config = Sb3Config(
@@ -44,6 +48,7 @@ def main() -> None:
         curve_every=args.every,
         curve_episodes=args.episodes,
         seed=args.seed,
+        n_envs=args.n_envs,
     )
     out = args.out or tempfile.mkdtemp(prefix="sb3-")
     print(f"{config}\nout: {out}", flush=True)

@@ -1,0 +1,72 @@
+"""The Franka Panda in tolins' units: the scaled model is the metre model, in mm."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from tolins.mjcf.panda import (
+    ARM_JOINTS,
+    FINGER_JOINTS,
+    GRIP_SITE,
+    MM_PER_M,
+    panda_spec,
+    panda_spec_in_metres,
+)
+
+MM = MM_PER_M
+
+
+@pytest.fixture(scope="module")
+def models() -> tuple[mujoco.MjModel, mujoco.MjModel]:
+    return panda_spec_in_metres().compile(), panda_spec().compile()
+
+
+def _poses(seed: int, metres: mujoco.MjModel) -> np.ndarray:
+    low, high = metres.jnt_range[:, 0], metres.jnt_range[:, 1]
+    return np.random.default_rng(seed).uniform(low, high)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_mm_model_is_the_metre_model_in_mm(models, seed: int) -> None:
+    metres, mm = models
+    assert [mm.joint(i).name for i in range(mm.njnt)] == [*ARM_JOINTS, *FINGER_JOINTS]
+    assert mm.body_mass.sum() == pytest.approx(metres.body_mass.sum(), rel=1e-12)
+    q = _poses(seed, metres)
+    unit = np.r_[np.ones(7), MM, MM]  # hinges in rad, the finger slides in m → mm
+    d_m, d_mm = mujoco.MjData(metres), mujoco.MjData(mm)
+    d_m.qpos[:], d_mm.qpos[:] = q, q * unit
+    d_m.qvel[:] = d_mm.qvel[:] = 0.0
+    mujoco.mj_forward(metres, d_m)
+    mujoco.mj_forward(mm, d_mm)
+    np.testing.assert_allclose(d_mm.site(GRIP_SITE).xpos, d_m.site(GRIP_SITE).xpos * MM, atol=1e-9)
+    np.testing.assert_allclose(d_mm.site(GRIP_SITE).xmat, d_m.site(GRIP_SITE).xmat, atol=1e-12)
+    # Gravity torques: N·m → kg·mm²/s² (× 1e6) on the hinges, N → mN on the fingers.
+    bias = d_m.qfrc_bias * np.r_[np.full(7, MM**2), MM, MM]
+    np.testing.assert_allclose(d_mm.qfrc_bias, bias, rtol=1e-9, atol=1e-6 * np.abs(bias).max())
+    # The joint-space inertia of the arm: kg·m² → kg·mm².
+    full_m, full_mm = np.zeros((9, 9)), np.zeros((9, 9))
+    mujoco.mj_fullM(metres, d_m, full_m)
+    mujoco.mj_fullM(mm, d_mm, full_mm)
+    np.testing.assert_allclose(full_mm[:7, :7], full_m[:7, :7] * MM**2, rtol=1e-9, atol=1e-3)
+
+
+def test_the_arm_is_torque_driven_within_the_frankas_limits(models) -> None:
+    _, mm = models
+    torque_limit = np.r_[np.full(4, 87.0), np.full(3, 12.0)] * MM**2  # N·m in kg·mm²/s²
+    np.testing.assert_allclose(mm.actuator_ctrlrange[:7, 1], torque_limit)
+    np.testing.assert_allclose(mm.actuator_ctrlrange[7:, 1], 70.0 * MM)  # 70 N per finger
+    assert np.all(mm.actuator_biastype == mujoco.mjtBias.mjBIAS_NONE)
+    # A motor's force is its control: one N·m on joint 4 accelerates it as M⁻¹ says.
+    data = mujoco.MjData(mm)
+    data.qpos[3] = -1.5
+    mujoco.mj_forward(mm, data)
+    free = data.qacc.copy()
+    data.ctrl[3] = 1.0 * MM**2
+    mujoco.mj_forward(mm, data)
+    unit = np.zeros(mm.nv)
+    unit[3] = MM**2
+    expected = np.zeros(mm.nv)
+    mujoco.mj_solveM(mm, data, expected.reshape(1, -1), unit.reshape(1, -1))
+    np.testing.assert_allclose(data.qacc - free, expected, rtol=1e-6, atol=1e-9)

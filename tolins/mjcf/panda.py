@@ -1,0 +1,124 @@
+"""The Franka Panda arm and hand as an ``MjSpec`` in tolins' units (mm, kg, s), torque-driven.
+
+The model is read as package data of gymnasium-robotics (``tolins[robot]``): its
+``kitchen_franka/franka_assets`` (MIT; the Franka model of Vikash Kumar's ``franka``,
+Apache-2.0), without importing that package. Its limits are the Franka's published ones:
+joint ranges, torque limits of 87 N·m (joints 1–4) and 12 N·m (5–7), 70 N per finger.
+
+tolins' socket models are in mm (:mod:`tolins.mjcf.model`), the Panda's files in metres, so
+:func:`scale_to_mm` rescales every length-carrying field: positions and sizes by 1000,
+inertias, hinge damping, armature, friction loss and torques by 1000², slide ranges and
+forces by 1000 (a force is kg·mm/s², a mN), gravity to −9810 mm/s². Forward kinematics,
+masses and the gravity torques of the scaled model are the metre model's in those units
+(tested). The position servos of the files become motors (``ctrl`` = torque, N·mm… in
+model units: ``ctrlrange`` = the torque limit), so that a task-space controller commands
+joint torques.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+#: Model units per metre.
+MM_PER_M = 1000.0
+#: The seven arm joints and the two finger joints of the model, in order.
+ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
+FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
+#: The site between the fingertips (the hand's tool frame), 210 mm below the flange.
+GRIP_SITE = "end_effector"
+#: Gravity in model units (mm/s²).
+GRAVITY = np.array([0.0, 0.0, -9.81 * MM_PER_M])
+
+_PACKAGE = "gymnasium_robotics"
+_ASSETS = Path("envs", "assets", "kitchen_franka", "franka_assets")
+
+
+def panda_assets() -> Path:
+    """The folder of the Panda's MJCF files and meshes (``ImportError`` naming the extra
+    when gymnasium-robotics is not installed)."""
+    found = importlib.util.find_spec(_PACKAGE)
+    if found is None or not found.submodule_search_locations:
+        raise ImportError(
+            "the Panda model is read from gymnasium-robotics' package data: "
+            "pip install 'tolins[robot]'"
+        )
+    folder = Path(next(iter(found.submodule_search_locations))) / _ASSETS
+    if not (folder / "chain.xml").is_file():
+        raise ImportError(f"{folder}: no chain.xml; allowed: gymnasium-robotics 1.4")
+    return folder
+
+
+def panda_spec_in_metres() -> mujoco.MjSpec:
+    """The Panda's files as they are (metres, position servos), meshes found."""
+    folder = panda_assets()
+    xml = (
+        '<mujoco model="panda">'
+        f'<include file="{folder / "assets.xml"}"/>'
+        f'<worldbody><include file="{folder / "chain.xml"}"/></worldbody>'
+        f'<include file="{folder / "actuator.xml"}"/>'
+        "</mujoco>"
+    )
+    spec = mujoco.MjSpec.from_string(xml)
+    # The parser resolves mesh files against the including file's folder, not meshdir.
+    for mesh in spec.meshes:
+        mesh.file = str(folder / "meshes" / Path(mesh.file).relative_to(folder))
+    return spec
+
+
+def scale_to_mm(spec: mujoco.MjSpec) -> mujoco.MjSpec:
+    """``spec`` (in metres) rescaled in place to mm, kg, s; returned."""
+    mm, mm2 = MM_PER_M, MM_PER_M**2
+    for body in spec.bodies:
+        body.pos, body.ipos = body.pos * mm, body.ipos * mm
+        body.inertia, body.fullinertia = body.inertia * mm2, body.fullinertia * mm2
+    for geom in spec.geoms:
+        geom.pos = geom.pos * mm
+        geom.margin, geom.gap = geom.margin * mm, geom.gap * mm
+        if geom.type != mujoco.mjtGeom.mjGEOM_MESH:
+            geom.size = geom.size * mm
+        if not np.isnan(geom.fromto[0]):
+            geom.fromto = geom.fromto * mm
+        geom.solimp = np.array(geom.solimp) * [1, 1, mm, 1, 1]  # its width is a length
+        geom.friction = np.array(geom.friction) * [1, mm, mm]  # torsional, rolling: lengths
+    for mesh in spec.meshes:
+        mesh.scale = np.array(mesh.scale) * mm
+    for site in spec.sites:
+        site.pos, site.size = site.pos * mm, site.size * mm
+    for joint in spec.joints:
+        if joint.type == mujoco.mjtJoint.mjJNT_HINGE:  # N·m·s, kg·m², N·m
+            joint.damping, joint.armature = joint.damping * mm2, joint.armature * mm2
+            joint.frictionloss *= mm2
+        else:  # slides: N·s/m and kg keep their numbers; metres and newtons do not
+            joint.range, joint.frictionloss = np.array(joint.range) * mm, joint.frictionloss * mm
+    for actuator in spec.actuators:
+        hinge = spec.joint(actuator.target).type == mujoco.mjtJoint.mjJNT_HINGE
+        gain, bias = np.array(actuator.gainprm), np.array(actuator.biasprm)
+        if hinge:  # kp in N·m/rad, kv in N·m·s/rad
+            gain[0], bias[1], bias[2] = gain[0] * mm2, bias[1] * mm2, bias[2] * mm2
+        else:
+            actuator.ctrlrange = np.array(actuator.ctrlrange) * mm
+        actuator.gainprm, actuator.biasprm = gain, bias
+        actuator.forcerange = np.array(actuator.forcerange) * (mm2 if hinge else mm)
+    spec.option.gravity = GRAVITY
+    return spec
+
+
+def torque_motors(spec: mujoco.MjSpec) -> mujoco.MjSpec:
+    """Every actuator of ``spec`` turned into a motor on its joint whose control is the
+    force or torque itself, limited to the actuator's force range; returned."""
+    for actuator in spec.actuators:
+        limit = np.array(actuator.forcerange)
+        actuator.set_to_motor()
+        actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        actuator.ctrlrange = limit
+    return spec
+
+
+def panda_spec() -> mujoco.MjSpec:
+    """The Panda arm and hand in mm, kg, s, torque-driven (seven arm motors, two finger
+    motors)."""
+    return torque_motors(scale_to_mm(panda_spec_in_metres()))

@@ -70,3 +70,36 @@ def test_the_arm_is_torque_driven_within_the_frankas_limits(models) -> None:
     expected = np.zeros(mm.nv)
     mujoco.mj_solveM(mm, data, expected.reshape(1, -1), unit.reshape(1, -1))
     np.testing.assert_allclose(data.qacc - free, expected, rtol=1e-6, atol=1e-9)
+
+
+def test_the_fingers_hold_the_part_by_friction_under_the_task_space_law() -> None:
+    import tolins
+    from tolins.mjcf.panda import HOLD, panda_world
+    from tolins.physics.arm import Arm, place_grasp
+
+    model = panda_world(tolins.CircularSocket(2, 2)).compile()
+    data, arm = mujoco.MjData(model), Arm(model)
+    assert not model.geom_contype[model.geom_bodyid == model.body("panda/panda0_link3").id].any()
+    target, rot, posture = place_grasp(model, data, arm, np.array([0.5, -0.3, 0.05, 17.0]))
+    np.testing.assert_allclose(arm.error(data, target, rot), 0.0, atol=1e-6)
+    part = model.joint("workpiece").qposadr[0]
+    dt, every = model.opt.timestep, 2  # the law at 500 Hz
+    offsets, errors = [], []
+    for k in range(1500):
+        if k % every == 0:
+            if k >= 1000:  # then descend at the paper's a_max
+                target = target + np.array([0.0, 0.0, -2.5]) * every * dt
+            twist = np.r_[0.0, 0.0, -2.5 if k >= 1000 else 0.0, 0.0, 0.0, 0.0]
+            data.ctrl[arm.motors] = arm.torques(data, target, rot, twist, posture)
+        data.ctrl[arm.finger_motors] = -20.0 * MM  # 20 N closing each finger
+        data.eq_active[model.equality(HOLD).id] = k < 400  # then friction alone holds it
+        mujoco.mj_step(model, data)
+        if k >= 400:
+            offsets.append(data.qpos[part : part + 3] - data.site_xpos[arm.site])
+            errors.append(np.linalg.norm(arm.error(data, target, rot)[:3]))
+    assert sum(w.number for w in data.warning) == 0
+    slip = np.linalg.norm(np.array(offsets[-1]) - offsets[0])
+    assert slip < 1.0  # mm: the part stays in the hand once the weld is off
+    assert max(errors) < 1.0  # mm, holding and descending at 2.5 mm/s
+    # It descended with the hand: 1.25 mm commanded, less the law's lag (< 1 mm).
+    assert 17.0 - 1.25 - 1.0 < data.qpos[part + 2] < 17.0 - 0.25

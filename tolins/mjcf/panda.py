@@ -10,9 +10,9 @@ tolins' socket models are in mm (:mod:`tolins.mjcf.model`), the Panda's files in
 inertias, hinge damping, armature, friction loss and torques by 1000², slide ranges and
 forces by 1000 (a force is kg·mm/s², a mN), gravity to −9810 mm/s². Forward kinematics,
 masses and the gravity torques of the scaled model are the metre model's in those units
-(tested). The position servos of the files become motors (``ctrl`` = torque, N·mm… in
-model units: ``ctrlrange`` = the torque limit), so that a task-space controller commands
-joint torques.
+(tested). The position servos of the files become motors (``ctrl`` = torque in model
+units, ``ctrlrange`` = the torque limit), so that a task-space controller commands joint
+torques. :func:`panda_world` puts the arm beside a socket, holding its workpiece.
 """
 
 from __future__ import annotations
@@ -23,6 +23,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.workspace import PIN_LENGTH
+from tolins.mjcf.model import CARRIER_THICKNESS, make_mjcf
+
 #: Model units per metre.
 MM_PER_M = 1000.0
 #: The seven arm joints and the two finger joints of the model, in order.
@@ -32,6 +36,24 @@ FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
 GRIP_SITE = "end_effector"
 #: Gravity in model units (mm/s²).
 GRAVITY = np.array([0.0, 0.0, -9.81 * MM_PER_M])
+
+#: The prefix of the arm's element names in a world of :func:`panda_world`.
+PREFIX = "panda/"
+#: Half sizes (mm) of the handle on the carrier that the fingers close on.
+HANDLE = np.array([6.0, 8.0, 10.0])
+HANDLE_MASS = 0.05
+#: The arm's base relative to the board's top centre (mm).
+BASE = (-450.0, 0.0, -60.0)
+#: Friction of the finger pads on the handle (tangential; torsional and rolling in mm).
+GRIP_FRICTION = (1.0, 0.005, 0.0001)
+#: The weld that holds the part in the hand while the fingers close.
+HOLD = "hold"
+#: The body the weld holds the part to (the flange's link).
+HAND_BODY = PREFIX + "panda0_link7"
+#: The arm's motors, joint 1 to 7, in a world of :func:`panda_world`.
+ARM_MOTORS = tuple(f"{PREFIX}panda0_joint{i}" for i in range(1, 8))
+#: The finger motors (closing: negative force).
+FINGER_ACTUATORS = (PREFIX + "r_gripper_finger_joint", PREFIX + "l_gripper_finger_joint")
 
 _PACKAGE = "gymnasium_robotics"
 _ASSETS = Path("envs", "assets", "kitchen_franka", "franka_assets")
@@ -122,3 +144,54 @@ def panda_spec() -> mujoco.MjSpec:
     """The Panda arm and hand in mm, kg, s, torque-driven (seven arm motors, two finger
     motors)."""
     return torque_motors(scale_to_mm(panda_spec_in_metres()))
+
+
+def handle_centre_height() -> float:
+    """Height (mm) of the handle's centre above the pin tips: where the grip site goes."""
+    return PIN_LENGTH + CARRIER_THICKNESS + float(HANDLE[2])
+
+
+def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> mujoco.MjSpec:
+    """``socket``'s board and workpiece with the Panda holding the part: the workpiece on a
+    free joint (its servos gone) with a handle on its carrier, gravity on, the weld
+    :data:`HOLD` (inactive until set) from the part to the hand, and the arm at ``base``.
+    The arm's links collide with nothing of the task; the fingers with the part only (the
+    board cannot be reached by them with a part in the hand)."""
+    world = mujoco.MjSpec.from_string(make_mjcf(socket))
+    workpiece = world.body("workpiece")
+    for joint in list(workpiece.joints):
+        world.delete(joint)
+    for actuator in list(world.actuators):
+        world.delete(actuator)
+    workpiece.add_freejoint(name="workpiece")
+    workpiece.add_geom(
+        name="handle",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=HANDLE,
+        pos=[0.0, 0.0, handle_centre_height()],
+        contype=2,
+        conaffinity=1,
+        mass=HANDLE_MASS,
+        friction=GRIP_FRICTION,
+    )
+    world.add_equality(
+        type=mujoco.mjtEq.mjEQ_WELD,
+        name=HOLD,
+        name1="workpiece",
+        name2=HAND_BODY,
+        objtype=mujoco.mjtObj.mjOBJ_BODY,
+        active=False,
+    )
+    world.option.gravity = GRAVITY
+    arm = panda_spec()
+    arm.option.timestep = world.option.timestep
+    for actuator in arm.actuators:  # the files' metadata for their own controllers
+        actuator.userdata = []
+    arm.nuser_actuator = -1
+    for geom in arm.geoms:
+        finger = geom.parent.name.endswith("finger")
+        geom.contype, geom.conaffinity = (1, 2) if finger else (0, 0)
+        if finger:
+            geom.friction = GRIP_FRICTION
+    world.attach(arm, prefix=PREFIX, frame=world.worldbody.add_frame(pos=base))
+    return world

@@ -1,0 +1,160 @@
+"""A Panda holding the workpiece: placing the grasp, and the task-space control law.
+
+:class:`Arm` reads a world of :func:`tolins.mjcf.panda.panda_world`: the grip site's
+Jacobian, damped-least-squares IK within the joint limits, and the operational-space law
+
+    τ = Jᵀ Λ (Kp e + Kd (v* − v)) + N (M (kq (q₀ − q) − 2 √kq q̇)) + b(q, q̇),
+
+with ``e`` the grip site's position (mm) and rotation (rad) error, ``v*`` the commanded
+twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-space inertia, ``N = I − Jᵀ J̄ᵀ`` the null space of
+the dynamically consistent inverse ``J̄ = M⁻¹ Jᵀ Λ`` (a posture ``q₀`` held there), ``b``
+gravity and Coriolis (MuJoCo's ``qfrc_bias``), clipped to the Franka's torque limits.
+:func:`place_grasp` puts the hand around the part's handle at a pose and welds the part
+to it while the fingers close.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from tolins.mjcf.panda import (
+    ARM_JOINTS,
+    ARM_MOTORS,
+    FINGER_ACTUATORS,
+    FINGER_JOINTS,
+    GRIP_SITE,
+    HAND_BODY,
+    HANDLE,
+    HOLD,
+    PREFIX,
+    handle_centre_height,
+)
+
+#: The Panda's usual ready posture (rad): the IK's start and the null-space posture's.
+READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+
+
+@dataclass(frozen=True)
+class Gains:
+    """The law's gains: ``stiffness`` (s⁻², per task axis: x, y, z, then rotations), the
+    damping critical for a unit mass (``2 √Kp``), and the posture's ``null`` (s⁻²)."""
+
+    stiffness: tuple[float, ...] = (2000.0,) * 6
+    null: float = 20.0
+
+    @property
+    def damping(self) -> np.ndarray:
+        return 2.0 * np.sqrt(np.asarray(self.stiffness))
+
+
+def grip_rotation(yaw: float) -> np.ndarray:
+    """The grip frame pointing down with its x axis at ``yaw`` (the fingers close along y)."""
+    x = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    z = np.array([0.0, 0.0, -1.0])
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+class Arm:
+    """The arm of a Panda world: its addresses, the grip site's Jacobian, IK and the law."""
+
+    def __init__(self, model: mujoco.MjModel, gains: Gains | None = None) -> None:
+        self.model, self.gains = model, gains or Gains()
+        self.site = model.site(PREFIX + GRIP_SITE).id
+        joints = [model.joint(PREFIX + name) for name in ARM_JOINTS]
+        self.qpos = np.array([joint.qposadr[0] for joint in joints])
+        self.dof = np.array([joint.dofadr[0] for joint in joints])
+        self.range = model.jnt_range[[joint.id for joint in joints]]
+        self.fingers = np.array([model.joint(PREFIX + name).qposadr[0] for name in FINGER_JOINTS])
+        self.finger_motors = np.array([model.actuator(name).id for name in FINGER_ACTUATORS])
+        self.motors = np.array([model.actuator(name).id for name in ARM_MOTORS])
+        self.limit = model.actuator_ctrlrange[self.motors, 1]
+        self._jp, self._jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+        self._mass = np.zeros((model.nv, model.nv))
+
+    def error(self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """``[position error (mm), rotation error (rad)]`` of the grip site to ``pos``, ``rot``."""
+        current = data.site_xmat[self.site].reshape(3, 3)
+        spin = 0.5 * sum(np.cross(current[:, i], rot[:, i]) for i in range(3))
+        return np.r_[pos - data.site_xpos[self.site], spin]
+
+    def jacobian(self, data: mujoco.MjData) -> np.ndarray:
+        """The grip site's ``(6, 7)`` Jacobian over the arm's joints (mm and rad)."""
+        mujoco.mj_jacSite(self.model, data, self._jp, self._jr, self.site)
+        return np.vstack([self._jp[:, self.dof], self._jr[:, self.dof]])
+
+    def solve_ik(
+        self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray, iterations: int = 300
+    ) -> np.ndarray:
+        """Joint angles (from :data:`READY`, within the joint limits) that put the grip site
+        at ``pos``, ``rot``; written into ``data.qpos`` and returned."""
+        data.qpos[self.qpos] = READY
+        scale = np.r_[np.full(3, 0.01), np.ones(3)]  # 100 mm weigh as 1 rad
+        for _ in range(iterations):
+            mujoco.mj_kinematics(self.model, data)
+            mujoco.mj_comPos(self.model, data)
+            error = self.error(data, pos, rot) * scale
+            if np.linalg.norm(error) < 1e-12:
+                break
+            jac = self.jacobian(data) * scale[:, None]
+            step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-8 * np.eye(6), error)
+            data.qpos[self.qpos] = np.clip(data.qpos[self.qpos] + step, *self.range.T)
+        return data.qpos[self.qpos].copy()
+
+    def torques(
+        self,
+        data: mujoco.MjData,
+        pos: np.ndarray,
+        rot: np.ndarray,
+        twist: np.ndarray,
+        posture: np.ndarray,
+    ) -> np.ndarray:
+        """The law's joint torques (model units) toward ``pos``, ``rot`` moving at ``twist``
+        (mm/s, rad/s), holding ``posture`` in the null space; within the torque limits."""
+        jac = self.jacobian(data)
+        mujoco.mj_fullM(self.model, data, self._mass)
+        mass = self._mass[np.ix_(self.dof, self.dof)]
+        inverse = np.linalg.inv(mass)
+        task = np.linalg.inv(jac @ inverse @ jac.T)
+        velocity = jac @ data.qvel[self.dof]
+        stiffness = np.asarray(self.gains.stiffness)
+        wrench = stiffness * self.error(data, pos, rot) + self.gains.damping * (twist - velocity)
+        consistent = inverse @ jac.T @ task
+        null = np.eye(len(self.dof)) - jac.T @ consistent.T
+        rate = self.gains.null
+        qdot = data.qvel[self.dof]
+        hold = mass @ (rate * (posture - data.qpos[self.qpos]) - 2.0 * np.sqrt(rate) * qdot)
+        tau = jac.T @ (task @ wrench) + null @ hold + data.qfrc_bias[self.dof]
+        return np.clip(tau, -self.limit, self.limit)
+
+
+def place_grasp(
+    model: mujoco.MjModel, data: mujoco.MjData, arm: Arm, pose: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reset ``data`` with the part at ``pose`` ``[x, y, theta, z]`` (tips' height z), the
+    hand around its handle (fingers 1 mm off each side) and the weld :data:`HOLD` on,
+    holding the part where it is in the hand. Returns the grip site's target position,
+    rotation and the posture (the IK's joint angles)."""
+    mujoco.mj_resetData(model, data)
+    x, y, theta, z = (float(v) for v in pose)
+    part = model.joint("workpiece").qposadr[0]
+    data.qpos[part : part + 3] = x, y, z
+    data.qpos[part + 3 : part + 7] = np.cos(theta / 2), 0.0, 0.0, np.sin(theta / 2)
+    target = np.array([x, y, z + handle_centre_height()])
+    rot = grip_rotation(theta)
+    posture = arm.solve_ik(data, target, rot)
+    data.qpos[arm.fingers] = HANDLE[1] + 1.0
+    mujoco.mj_forward(model, data)
+    hold, hand = model.equality(HOLD).id, model.body(HAND_BODY).id
+    body = model.body("workpiece").id
+    frame = data.xmat[hand].reshape(3, 3)
+    inverse, relative = np.zeros(4), np.zeros(4)
+    mujoco.mju_negQuat(inverse, data.xquat[hand])
+    mujoco.mju_mulQuat(relative, inverse, data.xquat[body])
+    model.eq_data[hold, 3:6] = frame.T @ (data.xpos[body] - data.xpos[hand])
+    model.eq_data[hold, 6:10] = relative
+    model.eq_data[hold, 10] = 1.0  # torquescale: the orientation held as the position
+    data.eq_active[hold] = True
+    return target, rot, posture

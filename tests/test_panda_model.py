@@ -99,7 +99,7 @@ def test_the_fingers_hold_the_part_by_friction_under_the_task_space_law() -> Non
             errors.append(np.linalg.norm(arm.error(data, target, rot)[:3]))
     assert sum(w.number for w in data.warning) == 0
     slip = np.linalg.norm(np.array(offsets[-1]) - offsets[0])
-    assert slip < 1.0  # mm: the part stays in the hand once the weld is off
+    assert slip < 0.3  # mm: the part stays in the hand once the weld is off (0.09 measured)
     assert max(errors) < 1.0  # mm, holding and descending at 2.5 mm/s
     # It descended with the hand: 1.25 mm commanded, less the law's lag (< 1 mm).
     assert 17.0 - 1.25 - 1.0 < data.qpos[part + 2] < 17.0 - 0.25

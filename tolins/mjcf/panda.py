@@ -25,7 +25,7 @@ import numpy as np
 
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.workspace import PIN_LENGTH
-from tolins.mjcf.model import CARRIER_THICKNESS, make_mjcf
+from tolins.mjcf.model import CARRIER_THICKNESS, SOLIMP, SOLREF, make_mjcf
 
 #: Model units per metre.
 MM_PER_M = 1000.0
@@ -55,6 +55,8 @@ ARM_MOTORS = tuple(f"{PREFIX}panda0_joint{i}" for i in range(1, 8))
 #: The finger motors (closing: negative force).
 FINGER_ACTUATORS = (PREFIX + "r_gripper_finger_joint", PREFIX + "l_gripper_finger_joint")
 
+_SOLREF = [float(v) for v in SOLREF.split()]
+_SOLIMP = [*(float(v) for v in SOLIMP.split()), 0.5, 2.0]  # MuJoCo's midpoint, power
 _PACKAGE = "gymnasium_robotics"
 _ASSETS = Path("envs", "assets", "kitchen_franka", "franka_assets")
 
@@ -191,7 +193,7 @@ def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> 
     for geom in arm.geoms:
         finger = geom.parent.name.endswith("finger")
         geom.contype, geom.conaffinity = (1, 2) if finger else (0, 0)
-        if finger:
-            geom.friction = GRIP_FRICTION
+        if finger:  # the task's stiff contacts: the files' soft pads let the part creep
+            geom.friction, geom.solref, geom.solimp = GRIP_FRICTION, _SOLREF, _SOLIMP
     world.attach(arm, prefix=PREFIX, frame=world.worldbody.add_frame(pos=base))
     return world

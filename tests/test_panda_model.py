@@ -74,7 +74,7 @@ def test_the_arm_is_torque_driven_within_the_frankas_limits(models) -> None:
 
 def test_the_fingers_hold_the_part_by_friction_under_the_task_space_law() -> None:
     import tolins
-    from tolins.mjcf.panda import HOLD, panda_world
+    from tolins.mjcf.panda import HOLD, WRIST_FORCE, panda_world
     from tolins.physics.arm import Arm, place_grasp
 
     model = panda_world(tolins.CircularSocket(2, 2)).compile()
@@ -98,6 +98,12 @@ def test_the_fingers_hold_the_part_by_friction_under_the_task_space_law() -> Non
             offsets.append(data.qpos[part : part + 3] - data.site_xpos[arm.site])
             errors.append(np.linalg.norm(arm.error(data, target, rot)[:3]))
     assert sum(w.number for w in data.warning) == 0
+    # Held in the air, the wrist reads the weight of the hand, the fingers and the part.
+    hand = model.body("panda/panda0_hand").id
+    below = model.body_subtreemass[hand] + model.body_subtreemass[model.body("workpiece").id]
+    force = data.sensor(WRIST_FORCE).data
+    wrist_frame = data.site_xmat[model.site("panda/flange").id].reshape(3, 3)
+    np.testing.assert_allclose(wrist_frame @ force, [0.0, 0.0, below * 9810.0], rtol=0.02, atol=5.0)
     slip = np.linalg.norm(np.array(offsets[-1]) - offsets[0])
     assert slip < 0.3  # mm: the part stays in the hand once the weld is off (0.09 measured)
     assert max(errors) < 1.0  # mm, holding and descending at 2.5 mm/s

@@ -12,7 +12,9 @@ forces by 1000 (a force is kg·mm/s², a mN), gravity to −9810 mm/s². Forward
 masses and the gravity torques of the scaled model are the metre model's in those units
 (tested). The position servos of the files become motors (``ctrl`` = torque in model
 units, ``ctrlrange`` = the torque limit), so that a task-space controller commands joint
-torques. :func:`panda_world` puts the arm beside a socket, holding its workpiece.
+torques. The hand is moved into a body of its own at the flange, so that a wrist
+force/torque sensor there reads what a real one does. :func:`panda_world` puts the arm
+beside a socket, holding its workpiece.
 """
 
 from __future__ import annotations
@@ -32,8 +34,11 @@ MM_PER_M = 1000.0
 #: The seven arm joints and the two finger joints of the model, in order.
 ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
-#: The site between the fingertips (the hand's tool frame), 210 mm below the flange.
+#: The site between the fingertips (the hand's tool frame), 210 mm along link 7.
 GRIP_SITE = "end_effector"
+#: The hand's body, mounted at the flange, and the flange's site (the wrist sensor's).
+HAND = "panda0_hand"
+FLANGE = "flange"
 #: Gravity in model units (mm/s²).
 GRAVITY = np.array([0.0, 0.0, -9.81 * MM_PER_M])
 
@@ -46,6 +51,9 @@ HANDLE_MASS = 0.05
 BASE = (-450.0, 0.0, -60.0)
 #: Friction of the finger pads on the handle (tangential; torsional and rolling in mm).
 GRIP_FRICTION = (1.0, 0.005, 0.0001)
+#: The wrist's force/torque sensors at the flange (model units, the flange's frame): what
+#: the link holds of the hand, the fingers and the part (a real wrist sensor's reading).
+WRIST_FORCE, WRIST_TORQUE = "wrist_force", "wrist_torque"
 #: The weld that holds the part in the hand while the fingers close.
 HOLD = "hold"
 #: The body the weld holds the part to (the flange's link).
@@ -76,21 +84,61 @@ def panda_assets() -> Path:
     return folder
 
 
-def panda_spec_in_metres() -> mujoco.MjSpec:
-    """The Panda's files as they are (metres, position servos), meshes found."""
-    folder = panda_assets()
-    xml = (
-        '<mujoco model="panda">'
-        f'<include file="{folder / "assets.xml"}"/>'
-        f'<worldbody><include file="{folder / "chain.xml"}"/></worldbody>'
-        f'<include file="{folder / "actuator.xml"}"/>'
-        "</mujoco>"
+def _inner(text: str) -> str:
+    """The content of a ``<mujocoinclude>`` file."""
+    start, end = text.index("<mujocoinclude>"), text.rindex("</mujocoinclude>")
+    return text[start + len("<mujocoinclude>") : end]
+
+
+def _replace_once(text: str, old: str, new: str) -> str:
+    if text.count(old) != 1:
+        raise ImportError(
+            f"the Panda's chain.xml is not the one expected ({old!r}); "
+            "allowed: gymnasium-robotics 1.4.2"
+        )
+    return text.replace(old, new)
+
+
+def _chain_with_hand(chain: str) -> str:
+    """``chain.xml`` with the hand in a body of its own, ``panda0_hand`` at the flange
+    (107 mm along link 7), so that a force/torque sensor there reads what a wrist sensor
+    reads: the hand, the fingers and what they hold. Positions inside move with it; the
+    kinematics are the same."""
+    hand_geom = '<geom pos="0 0 0.107" quat="0.92388 0 0 -0.382683" class="panda_viz"'
+    chain = _replace_once(
+        chain,
+        hand_geom,
+        f'<body name="{HAND}" pos="0 0 0.107"><site name="{FLANGE}" size="0.005"/>'
+        + hand_geom.replace("0 0 0.107", "0 0 0"),
     )
-    spec = mujoco.MjSpec.from_string(xml)
-    # The parser resolves mesh files against the including file's folder, not meshdir.
-    for mesh in spec.meshes:
-        mesh.file = str(folder / "meshes" / Path(mesh.file).relative_to(folder))
-    return spec
+    chain = _replace_once(
+        chain,
+        '<geom pos="0 0 0.107" quat="0.92388 0 0 -0.382683" class="panda_col"',
+        '<geom pos="0 0 0" quat="0.92388 0 0 -0.382683" class="panda_col"',
+    )
+    chain = _replace_once(chain, "pos='0 0 .210'", "pos='0 0 .103'")
+    for finger in ("leftfinger", "rightfinger"):
+        chain = _replace_once(
+            chain,
+            f'name="panda0_{finger}" pos="0 0 0.1654"',
+            f'name="panda0_{finger}" pos="0 0 0.0584"',
+        )
+    end = chain.index("</body>", chain.index('name="panda0_rightfinger"'))
+    return chain[: end + len("</body>")] + "</body>" + chain[end + len("</body>") :]
+
+
+def panda_spec_in_metres() -> mujoco.MjSpec:
+    """The Panda's files in one model (metres, position servos), the hand in its own body
+    (:func:`_chain_with_hand`)."""
+    folder = panda_assets()
+    assets = _inner((folder / "assets.xml").read_text())
+    assets = _replace_once(
+        assets, 'meshdir="franka_assets/meshes"', f'meshdir="{folder / "meshes"}"'
+    )
+    chain = _chain_with_hand(_inner((folder / "chain.xml").read_text()))
+    actuators = _inner((folder / "actuator.xml").read_text())
+    xml = f'<mujoco model="panda">{assets}<worldbody>{chain}</worldbody>{actuators}</mujoco>'
+    return mujoco.MjSpec.from_string(xml)
 
 
 def scale_to_mm(spec: mujoco.MjSpec) -> mujoco.MjSpec:
@@ -158,7 +206,9 @@ def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> 
     free joint (its servos gone) with a handle on its carrier, gravity on, the weld
     :data:`HOLD` (inactive until set) from the part to the hand, and the arm at ``base``.
     The arm's links collide with nothing of the task; the fingers with the part only (the
-    board cannot be reached by them with a part in the hand)."""
+    board cannot be reached by them with a part in the hand). The sensors
+    :data:`WRIST_FORCE` and :data:`WRIST_TORQUE` sit at the flange, beside the model's own
+    ``force``/``torque`` at the pins (the true contact wrench on the part)."""
     world = mujoco.MjSpec.from_string(make_mjcf(socket))
     workpiece = world.body("workpiece")
     for joint in list(workpiece.joints):
@@ -196,4 +246,11 @@ def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> 
         if finger:  # the task's stiff contacts: the files' soft pads let the part creep
             geom.friction, geom.solref, geom.solimp = GRIP_FRICTION, _SOLREF, _SOLIMP
     world.attach(arm, prefix=PREFIX, frame=world.worldbody.add_frame(pos=base))
+    for name, kind in (
+        (WRIST_FORCE, mujoco.mjtSensor.mjSENS_FORCE),
+        (WRIST_TORQUE, mujoco.mjtSensor.mjSENS_TORQUE),
+    ):
+        world.add_sensor(
+            name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname=PREFIX + FLANGE
+        )
     return world

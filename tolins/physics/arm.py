@@ -76,8 +76,12 @@ class Arm:
 
     def error(self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """``[position error (mm), rotation error (rad)]`` of the grip site to ``pos``, ``rot``."""
-        current = data.site_xmat[self.site].reshape(3, 3)
-        spin = 0.5 * sum(np.cross(current[:, i], rot[:, i]) for i in range(3))
+        # Σᵢ cᵢ × rᵢ / 2 over the columns of the current and target frames: the vee of
+        # the skew part of R* Rᵀ.
+        turn = rot @ data.site_xmat[self.site].reshape(3, 3).T
+        spin = 0.5 * np.array(
+            [turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]]
+        )
         return np.r_[pos - data.site_xpos[self.site], spin]
 
     def jacobian(self, data: mujoco.MjData) -> np.ndarray:

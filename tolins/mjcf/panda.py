@@ -223,9 +223,9 @@ def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> 
         pos=[0.0, 0.0, handle_centre_height()],
         contype=2,
         conaffinity=1,
-        mass=HANDLE_MASS,
         friction=GRIP_FRICTION,
     )
+    workpiece.mass += HANDLE_MASS  # the body's explicit inertial: geoms add no mass to it
     world.add_equality(
         type=mujoco.mjtEq.mjEQ_WELD,
         name=HOLD,

@@ -10,7 +10,9 @@ twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-space inertia, ``N = I − Jᵀ J�
 the dynamically consistent inverse ``J̄ = M⁻¹ Jᵀ Λ`` (a posture ``q₀`` held there), ``b``
 gravity and Coriolis (MuJoCo's ``qfrc_bias``), clipped to the Franka's torque limits.
 :func:`place_grasp` puts the hand around the part's handle at a pose and welds the part
-to it while the fingers close.
+to it while the fingers close. What a robot knows of the part: :func:`nominal_pose` (the
+grip site's forward kinematics and the nominal grasp) and :func:`wrist_wrench` (the wrist
+sensor with the weight of the hand and the part removed).
 """
 
 from __future__ import annotations
@@ -20,16 +22,22 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from tolins.mjcf import FORCE_SCALE
 from tolins.mjcf.panda import (
     ARM_JOINTS,
     ARM_MOTORS,
     FINGER_ACTUATORS,
     FINGER_JOINTS,
+    FLANGE,
+    GRAVITY,
     GRIP_SITE,
+    HAND,
     HAND_BODY,
     HANDLE,
     HOLD,
     PREFIX,
+    WRIST_FORCE,
+    WRIST_TORQUE,
     handle_centre_height,
 )
 
@@ -162,3 +170,25 @@ def place_grasp(
     model.eq_data[hold, 10] = 1.0  # torquescale: the orientation held as the position
     data.eq_active[hold] = True
     return target, rot, posture
+
+
+def nominal_pose(data: mujoco.MjData, arm: Arm) -> np.ndarray:
+    """The part's pose ``[x, y, theta, z]`` (mm, rad) as the robot believes it: the grip
+    site's forward kinematics, the part held as :func:`place_grasp` put it (its handle's
+    centre at the site, its z axis against the site's)."""
+    frame = data.site_xmat[arm.site].reshape(3, 3)
+    tips = data.site_xpos[arm.site] + frame @ np.array([0.0, 0.0, handle_centre_height()])
+    theta = float(np.arctan2(frame[1, 0], frame[0, 0]))
+    return np.array([tips[0], tips[1], theta, tips[2]])
+
+
+def wrist_wrench(model: mujoco.MjModel, data: mujoco.MjData, held_mass: float) -> np.ndarray:
+    """``[Fx, Fy, q_theta, Fz]`` (N, N·mm, world axes) the board exerts on the part, as a
+    wrist sensor tells it: the flange's force and torque in world axes, less the weight of
+    the hand, its fingers and ``held_mass`` (kg) (in equilibrium, what the flange does not
+    hold up the board does)."""
+    frame = data.site_xmat[model.site(PREFIX + FLANGE).id].reshape(3, 3)
+    mass = model.body_subtreemass[model.body(PREFIX + HAND).id] + held_mass
+    force = -mass * GRAVITY - frame @ data.sensor(WRIST_FORCE).data
+    torque = -(frame @ data.sensor(WRIST_TORQUE).data)
+    return np.array([force[0], force[1], torque[2], force[2]]) * FORCE_SCALE

@@ -114,6 +114,20 @@ def push_run(depth: float, rate: int = 500) -> dict[str, float]:
     }
 
 
+def law_cost(n: int, repeats: int = 2000) -> float:
+    """µs per simulation of one update of the law over a batch of ``n`` grasped Pandas
+    (:meth:`~tolins.physics.arm.Arm.batch_torques`)."""
+    model = panda_world(tolins.CircularSocket(2, 2)).compile()
+    arm, datas = Arm(model), [mujoco.MjData(model) for _ in range(n)]
+    targets = [place_grasp(model, data, arm, START) for data in datas]
+    pos, rot, posture = (np.stack([t[i] for t in targets]) for i in range(3))
+    twist, rounds = np.zeros((n, 6)), max(repeats // n, 20)
+    began = time.perf_counter()
+    for _ in range(rounds):
+        arm.batch_torques(datas, pos, rot, twist, posture)
+    return (time.perf_counter() - began) / rounds / n * 1e6
+
+
 def free_body_run(seconds: float) -> float:
     """Wall time per physics step (µs) of the 2*2's servo-driven workpiece descending."""
     model = mujoco.MjModel.from_xml_string(make_mjcf(tolins.CircularSocket(2, 2)))
@@ -152,6 +166,9 @@ def main() -> None:
             f"| {depth - 2.0:.1f} | {push['true_z']:.3f} | {push['wrist_z']:.3f} "
             f"| {push['largest_difference']:.3f} | {push['slip_mm']:.3f} |"
         )
+    print("\n| simulations in the batch | µs per simulation and update of the law |\n|--:|--:|")
+    for n in (1, 8, 32, 128):
+        print(f"| {n} | {law_cost(n):.1f} |")
     print(
         f"\nslip of the part in the hand after the weld's release: {panda['slip_mm']:.3f} mm; "
         f"grip-site error holding: {panda['hold_error_mm']:.3f} mm, descending at 2.5 mm/s: "

@@ -149,3 +149,29 @@ def test_the_wrist_tells_the_push_on_the_board_and_kinematics_the_pose() -> None
     slip = nominal_pose(data, arm)[[0, 1, 3]] - pose
     # (measured: 0.44 mm under a 13.4 N push, the wrist reading it to 0.01 N)
     assert np.linalg.norm(slip) < 0.6
+
+
+def test_the_law_over_a_batch_is_the_law_of_each_simulation() -> None:
+    import tolins
+    from tolins.mjcf.panda import panda_world
+    from tolins.physics.arm import Arm, place_grasp
+
+    model = panda_world(tolins.CircularSocket(2, 2)).compile()
+    arm = Arm(model)
+    datas = [mujoco.MjData(model) for _ in range(3)]
+    poses = ([0.5, -0.3, 0.05, 17.0], [-1.0, 0.8, -0.1, 15.0], [0.0, 0.0, 0.0, 16.0])
+    targets = [
+        place_grasp(model, data, arm, np.array(p)) for data, p in zip(datas, poses, strict=True)
+    ]
+    rng = np.random.default_rng(0)
+    for data in datas:  # away from the targets, moving: every term of the law matters
+        data.qpos[arm.qpos] += rng.normal(0.0, 0.02, 7)
+        data.qvel[arm.dof] = rng.normal(0.0, 0.1, 7)
+        mujoco.mj_forward(model, data)
+    pos, rot, posture = (np.stack([t[i] for t in targets]) for i in range(3))
+    twist = rng.normal(0.0, 1.0, (3, 6))
+    batch = arm.batch_torques(datas, pos, rot, twist, posture)
+    for i, data in enumerate(datas):
+        single = arm.torques(data, pos[i], rot[i], twist[i], posture[i])
+        np.testing.assert_allclose(batch[i], single, rtol=1e-9, atol=1e-6 * np.abs(single).max())
+    assert not np.allclose(batch[0], batch[1])  # three different simulations

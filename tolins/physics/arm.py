@@ -124,22 +124,52 @@ class Arm:
         posture: np.ndarray,
     ) -> np.ndarray:
         """The law's joint torques (model units) toward ``pos``, ``rot`` moving at ``twist``
-        (mm/s, rad/s), holding ``posture`` in the null space; within the torque limits."""
-        jac = self.jacobian(data)
-        mujoco.mj_fullM(self.model, data, self._mass)
-        mass = self._mass[np.ix_(self.dof, self.dof)]
+        (mm/s, rad/s), holding ``posture`` in the null space; within the torque limits (a
+        batch of one: :meth:`batch_torques`)."""
+        stacked = (np.asarray(v, dtype=float)[None] for v in (pos, rot, twist, posture))
+        return self.batch_torques([data], *stacked)[0]
+
+    def batch_torques(
+        self,
+        datas: list[mujoco.MjData],
+        pos: np.ndarray,
+        rot: np.ndarray,
+        twist: np.ndarray,
+        posture: np.ndarray,
+    ) -> np.ndarray:
+        """:meth:`torques` of every simulation in ``datas`` (of this arm's model) at once,
+        ``(n, 7)``: the Jacobians, mass matrices and errors read per simulation, the law's
+        algebra in one stacked numpy pass (``pos`` ``(n, 3)``, ``rot`` ``(n, 3, 3)``,
+        ``twist`` ``(n, 6)``, ``posture`` ``(n, 7)``)."""
+        jac = np.stack([self.jacobian(data) for data in datas])
+        mass = np.stack([self._arm_mass(data) for data in datas])
+        error = np.stack(
+            [self.error(data, p, r) for data, p, r in zip(datas, pos, rot, strict=True)]
+        )
+        q = np.stack([data.qpos[self.qpos] for data in datas])
+        qdot = np.stack([data.qvel[self.dof] for data in datas])
+        bias = np.stack([data.qfrc_bias[self.dof] for data in datas])
         inverse = np.linalg.inv(mass)
-        task = np.linalg.inv(jac @ inverse @ jac.T)
-        velocity = jac @ data.qvel[self.dof]
+        jac_t = jac.transpose(0, 2, 1)
+        task = np.linalg.inv(jac @ inverse @ jac_t)
+        velocity = np.einsum("nij,nj->ni", jac, qdot)
         stiffness = np.asarray(self.gains.stiffness)
-        wrench = stiffness * self.error(data, pos, rot) + self.gains.damping * (twist - velocity)
-        consistent = inverse @ jac.T @ task
-        null = np.eye(len(self.dof)) - jac.T @ consistent.T
+        wrench = stiffness * error + self.gains.damping * (twist - velocity)
+        consistent = inverse @ jac_t @ task
+        null = np.eye(len(self.dof)) - jac_t @ consistent.transpose(0, 2, 1)
         rate = self.gains.null
-        qdot = data.qvel[self.dof]
-        hold = mass @ (rate * (posture - data.qpos[self.qpos]) - 2.0 * np.sqrt(rate) * qdot)
-        tau = jac.T @ (task @ wrench) + null @ hold + data.qfrc_bias[self.dof]
+        hold = np.einsum("nij,nj->ni", mass, rate * (posture - q) - 2.0 * np.sqrt(rate) * qdot)
+        tau = (
+            np.einsum("nij,nj->ni", jac_t, np.einsum("nij,nj->ni", task, wrench))
+            + np.einsum("nij,nj->ni", null, hold)
+            + bias
+        )
         return np.clip(tau, -self.limit, self.limit)
+
+    def _arm_mass(self, data: mujoco.MjData) -> np.ndarray:
+        """The arm's ``(7, 7)`` block of the joint-space inertia (a copy)."""
+        mujoco.mj_fullM(self.model, data, self._mass)
+        return self._mass[np.ix_(self.dof, self.dof)]
 
 
 def place_grasp(

@@ -165,3 +165,12 @@ def test_rs_gail_curves_are_summed_into_env_steps_and_other_stages_skipped(tmp_p
     assert list(curves) == ["pi_n_safe-seed0"]
     assert curves["pi_n_safe-seed0"]["env_steps"].tolist() == [2000, 4001, 6003]
     assert curves["pi_n_safe-seed0"]["reward"].tolist() == [10.0, 11.0, 12.0]
+
+
+def test_training_leaves_no_logger_folder_behind(tmp_path, monkeypatch) -> None:
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    config = Sb3Config("sac", CIRCLE, backend="kinematic", env_steps=20, curve_every=20)
+    train_sb3(config, tmp_path / "run", **{"learning_starts": 10})
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]

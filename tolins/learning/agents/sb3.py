@@ -36,6 +36,7 @@ from tolins.learning.curves import write_curves_csv
 try:
     import torch
     from stable_baselines3 import PPO, SAC
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
     from stable_baselines3.common.vec_env import VecMonitor
 
@@ -82,7 +83,11 @@ def make_model(config: Sb3Config, **overrides):
         "features_extractor_class": ScaledObservation,
         **kwargs.get("policy_kwargs", {}),
     }
-    return ALGORITHMS[config.algorithm]("MlpPolicy", env, seed=config.seed, device="cpu", **kwargs)
+    model = ALGORITHMS[config.algorithm]("MlpPolicy", env, seed=config.seed, device="cpu", **kwargs)
+    # SB3's default logger makes a folder in the temporary directory per training and
+    # writes nothing into it at verbose 0: a logger with no outputs makes none.
+    model.set_logger(Logger(folder=None, output_formats=[]))
+    return model
 
 
 def curve_point(model, config: Sb3Config) -> dict[str, float]:

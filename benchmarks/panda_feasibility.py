@@ -103,7 +103,7 @@ def push_run(depth: float, rate: int = 500) -> dict[str, float]:
         if k * dt >= 2.0:
             frame = data.site_xmat[pins].reshape(3, 3)
             true.append(-(frame @ data.sensor("force").data) * FORCE_SCALE)
-            wrist.append(wrist_wrench(model, data, held)[[0, 1, 3]])
+            wrist.append(wrist_wrench(data, arm, held)[[0, 1, 3]])
     slip = nominal_pose(data, arm)[[0, 1, 3]] - data.qpos[part : part + 3]
     true_mean, wrist_mean = np.mean(true, axis=0), np.mean(wrist, axis=0)
     return {

@@ -140,7 +140,7 @@ def test_the_wrist_tells_the_push_on_the_board_and_kinematics_the_pose() -> None
         if k >= 2000:  # held 1 mm below the contact: a quasi-static push
             frame = data.site_xmat[pins].reshape(3, 3)
             true = -(frame @ data.sensor("force").data) * FORCE_SCALE  # board on the pins (N)
-            readings.append((wrist_wrench(model, data, held)[[0, 1, 3]], true))
+            readings.append((wrist_wrench(data, arm, held)[[0, 1, 3]], true))
     wrist, true = (np.mean([r[i] for r in readings], axis=0) for i in range(2))
     assert true[2] > 1.0  # N: the pins press on the board
     np.testing.assert_allclose(wrist, true, rtol=0.05, atol=0.05)

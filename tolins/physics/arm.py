@@ -79,6 +79,9 @@ class Arm:
         self.finger_motors = np.array([model.actuator(name).id for name in FINGER_ACTUATORS])
         self.motors = np.array([model.actuator(name).id for name in ARM_MOTORS])
         self.limit = model.actuator_ctrlrange[self.motors, 1]
+        self.flange = model.site(PREFIX + FLANGE).id
+        self.hand_mass = float(model.body_subtreemass[model.body(PREFIX + HAND).id])
+        self.wrist_sensors = [model.sensor(name).adr[0] for name in (WRIST_FORCE, WRIST_TORQUE)]
         self._jp, self._jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
         self._mass = np.zeros((model.nv, model.nv))
 
@@ -212,13 +215,15 @@ def nominal_pose(data: mujoco.MjData, arm: Arm) -> np.ndarray:
     return np.array([tips[0], tips[1], theta, tips[2]])
 
 
-def wrist_wrench(model: mujoco.MjModel, data: mujoco.MjData, held_mass: float) -> np.ndarray:
+def wrist_wrench(data: mujoco.MjData, arm: Arm, held_mass: float) -> np.ndarray:
     """``[Fx, Fy, q_theta, Fz]`` (N, N·mm, world axes) the board exerts on the part, as a
     wrist sensor tells it: the flange's force and torque in world axes, less the weight of
     the hand, its fingers and ``held_mass`` (kg) (in equilibrium, what the flange does not
     hold up the board does)."""
-    frame = data.site_xmat[model.site(PREFIX + FLANGE).id].reshape(3, 3)
-    mass = model.body_subtreemass[model.body(PREFIX + HAND).id] + held_mass
-    force = -mass * GRAVITY - frame @ data.sensor(WRIST_FORCE).data
-    torque = -(frame @ data.sensor(WRIST_TORQUE).data)
+    frame = data.site_xmat[arm.flange].reshape(3, 3)
+    force_at, torque_at = arm.wrist_sensors
+    force = (
+        -(arm.hand_mass + held_mass) * GRAVITY - frame @ data.sensordata[force_at : force_at + 3]
+    )
+    torque = -(frame @ data.sensordata[torque_at : torque_at + 3])
     return np.array([force[0], force[1], torque[2], force[2]]) * FORCE_SCALE

@@ -11,7 +11,7 @@ from tolins.bench.reports.robustness import format_section
 from tolins.bench.table.baselines import CurveSummary, summarise_curves
 from tolins.bench.table.claims import CEILING, SMALLEST_EFFECT, ClaimCheck
 from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
-from tolins.bench.table.results import read_results
+from tolins.bench.table.results import SCHEMA, read_results
 from tolins.bench.table.rows import BASELINE_ROWS, PAPER, SB3_METHODS, TRAININGS
 from tolins.bench.table.seeds import FIRST_SEED
 from tolins.bench.table.statistics import one_seed_margin
@@ -158,7 +158,7 @@ def _baselines_section(run: BenchRun, curves: dict[str, Any]) -> list[str]:
     )
     document = read_results(reference_path("paper"))
     shipped = {row_id: document["rows"][row_id] for row_id in ids if row_id in document["rows"]}
-    if not shipped or document.get("schema") != "tolins.results/3":
+    if not shipped or document.get("schema") != SCHEMA:
         note = (
             f"{lead}, and `{PREFIX}paper` ({document.get('date')}) holds none of today's "
             "R rows yet (R1.x on the sparse reward, R2.x on the dense one)."

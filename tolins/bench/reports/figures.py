@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from tolins.bench.jobs import trajectories
 from tolins.bench.reports import plots
 from tolins.bench.reports.force_plot import plot_row_profiles
-from tolins.bench.table.baselines import env_step_curves, read_curves
+from tolins.bench.table.baselines import Curve, read_curves
 from tolins.bench.table.rows import PAPER, ROWS, TRAININGS
 from tolins.envs.tasks import TASKS, task_of
 
@@ -18,14 +18,14 @@ if TYPE_CHECKING:
     from tolins.bench.pipeline.config import BenchRun
 
 
-def write_figures(run: BenchRun, out: Path) -> list[Path]:
-    """Draw every figure of ``run`` into ``out``; the paths written."""
+def write_figures(run: BenchRun, out: Path, step_curves: dict[str, Curve]) -> list[Path]:
+    """Draw every figure of ``run`` into ``out`` (``step_curves``: its stages'
+    :func:`~tolins.bench.table.baselines.env_step_curves`); the paths written."""
     results = run.results
     written = [plots.plot_table(out / "table.png", results, PAPER)]
     curves = _learning_curves(run)
     if curves:
         written.append(plots.plot_learning_curves(out / "learning_curves.png", curves))
-    step_curves = env_step_curves(run.stage_folders)
     if step_curves:
         written.append(plots.plot_env_step_curves(out / "env_step_curves.png", step_curves))
     fig_4a = _training_trajectories(run)

@@ -50,8 +50,8 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
         written.append(plot_robustness(out / "robustness.png", run.robustness))
     else:  # an earlier run's table would read as this run's
         (out / "robustness.png").unlink(missing_ok=True)
-    written += write_figures(run, out)
     curves = env_step_curves(run.stage_folders)
+    written += write_figures(run, out, curves)
     written.append(atomic_json(out / "curves.json", curves_json(curves)))
     written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
     text = format_markdown(run, _other_backend(out, backend), curves)

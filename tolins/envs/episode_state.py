@@ -45,6 +45,7 @@ class ResetPlan:
     pose: np.ndarray
     goal: np.ndarray
     physics: PhysicsDraw | None = None
+    grasp: np.ndarray | None = None
 
     def apply_physics(self, set_physics: Callable[[PhysicsDraw], object]) -> None:
         """Hand the episode's randomised physics to a simulator's ``set_physics`` (before
@@ -52,6 +53,12 @@ class ResetPlan:
         model as compiled."""
         if self.physics is not None:
             set_physics(self.physics)
+
+    def apply_grasp(self, set_grasp: Callable[[np.ndarray], object]) -> None:
+        """Hand the episode's grasp error to a robot's ``set_grasp`` (before its reset);
+        without ``grasp_error`` nothing is drawn and the robot keeps its grasp."""
+        if self.grasp is not None:
+            set_grasp(self.grasp)
 
 
 def check_options(options: dict[str, Any] | None) -> dict[str, Any]:
@@ -132,6 +139,7 @@ class EpisodeState:
             goal = self._goal if goal is None else goal
             socket = self.settings.draw_socket(rng)
             physics = self.settings.draw_physics(rng)
+            grasp = self.settings.draw_grasp(rng)
             if "pose" in options:
                 pose = check_pose(socket, options["pose"], "options['pose']")
             elif pose is not None:
@@ -142,7 +150,7 @@ class EpisodeState:
         except BaseException:
             self.broken = True
             raise
-        return ResetPlan(socket, pose, goal, physics)
+        return ResetPlan(socket, pose, goal, physics, grasp)
 
     def start(self, plan: ResetPlan, state: BackendState, rng: np.random.Generator) -> np.ndarray:
         """Start the planned episode from the simulator's first ``state``: its first
@@ -163,6 +171,8 @@ class EpisodeState:
         info = {**self.info(NO_SCORE), "workpiece": workpiece_dict(plan.socket)}
         if self.physics is not None:
             info["physics"] = self.physics.to_info()
+        if plan.grasp is not None:
+            info["grasp_error"] = plan.grasp.copy()
         return observation, info
 
     def _observe(self, state: BackendState, rng: np.random.Generator) -> np.ndarray:
@@ -216,7 +226,7 @@ class EpisodeState:
         state = self.state
         if success is None:
             success = self.settings.is_success(state, self.socket)
-        return {
+        info = {
             "success": success,
             "is_success": success,
             "collision": score.collision,
@@ -228,3 +238,8 @@ class EpisodeState:
             "goal": self.episode_goal.copy(),
             **score.reward_info(),
         }
+        if state.sensed_pose is not None:
+            info["sensed_pose"] = state.sensed_pose.copy()
+        if state.sensed_wrench is not None:
+            info["sensed_wrench"] = state.sensed_wrench.copy()
+        return info

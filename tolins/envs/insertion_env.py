@@ -15,11 +15,12 @@ from tolins.envs.task_settings import (
     TASK_KEYWORDS,
     SettingsAttributes,
     TaskSettings,
+    check_capabilities,
     check_keywords,
 )
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
-from tolins.physics import BACKENDS, Backend, simulator
+from tolins.physics import BACKENDS, Backend, make_backend, simulator
 
 __all__ = ["BACKENDS", "ENV_KEYWORDS", "InsertionEnv"]
 #: Every keyword ``InsertionEnv`` takes.
@@ -196,10 +197,12 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         render_mode: str | None = None,
         defects: Any = None,
         physics_version: int = 1,
+        robot: str = "free",
+        grasp_error: Any = None,
         **unknown: Any,
     ) -> None:
         check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
-        chosen = simulator(backend, single=True)
+        simulator(backend, single=True, robot=robot)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
         self.settings = TaskSettings(
@@ -216,13 +219,16 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             randomization=randomization,
             defects=defects,
             physics_version=physics_version,
+            robot=robot,
+            grasp_error=grasp_error,
         )
+        check_capabilities(self.settings, backend, single=True)
         self.backend_name = backend
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
-        self.backend: Backend | None = chosen.single(
-            socket, self.control_dt, physics_version=self.physics_version
+        self.backend: Backend | None = make_backend(
+            backend, socket, self.control_dt, self.physics_version, self.settings.robot
         )
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
@@ -253,6 +259,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             self.backend.set_socket(plan.socket)
             self._close_renderer()  # it draws the previous workpiece's model
         plan.apply_physics(self.backend.set_physics)
+        plan.apply_grasp(lambda grasp: self.backend.set_grasp(grasp))
         return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

@@ -24,9 +24,13 @@ from tolins.geometry.workspace import PIN_LENGTH, in_holes
 from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
+from tolins.physics.registry import check_robot, simulator, taking_defect
 from tolins.physics.schedule import check_control_dt
 from tolins.physics.versions import physics_version
 
+#: Largest std of the grasp error ``[x, y, yaw]`` (mm, mm, rad): beyond it the part could
+#: leave the fingers' pads.
+MAX_GRASP_ERROR_STD = np.array([1.0, 1.0, 0.1])
 #: Largest noise std of any measured quantity (mm, rad, N, N·mm): far beyond any sensor,
 #: it keeps every observation finite.
 MAX_NOISE_STD = 1e3
@@ -60,6 +64,17 @@ class TaskSettings:
             ``None``.
         physics_version: The MuJoCo physics, 1 or 2 (:mod:`tolins.physics.versions`; the
             ``-v1`` and ``-v2`` ids).
+        robot: What holds the workpiece (:data:`~tolins.physics.registry.ROBOTS`):
+            ``"free"``, the paper's ideal servos on a free-floating body, or ``"panda"``, a
+            Franka Panda (:mod:`tolins.physics.panda`).
+        grasp_error: Std ``[x, y, yaw]`` (mm, mm, rad, the hand's frame: x along the
+            finger pads, y across them) of where the part is put in the hand, drawn every
+            episode from independent normals clipped at 3 std (after the physics, before
+            the pose; the draw in the reset's ``info["grasp_error"]``), or ``None`` (the
+            part where the robot believes it). The closing fingers centre the part across
+            the pads and square it to them, so what stays is mostly the offset along the
+            pads: the part's true offset is ``info["pose"] - info["sensed_pose"]``. A
+            robot's only; each std at most :data:`MAX_GRASP_ERROR_STD`.
     """
 
     socket: SocketSpec
@@ -75,6 +90,8 @@ class TaskSettings:
     randomization: Any = None
     defects: Any = None
     physics_version: int = 1
+    robot: str = "free"
+    grasp_error: Any = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -109,6 +126,8 @@ class TaskSettings:
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "randomization", PhysicsRandomization.of(self.randomization))
         set_(self, "physics_version", physics_version(self.physics_version).number)
+        set_(self, "robot", check_robot(self.robot))
+        set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
             try:
@@ -131,6 +150,12 @@ class TaskSettings:
         """The episode's randomised physics (``None`` without ``randomization``)."""
         return None if self.randomization is None else self.randomization.sample(rng)
 
+    def draw_grasp(self, rng: np.random.Generator) -> np.ndarray | None:
+        """The episode's grasp error ``[dx, dy, dyaw]`` (``None`` without ``grasp_error``)."""
+        if self.grasp_error is None:
+            return None
+        return np.clip(rng.normal(0.0, 1.0, 3), -3.0, 3.0) * self.grasp_error
+
     def pose_distribution(self, physics: PhysicsDraw | None) -> InitialPoseDistribution:
         """The initial-pose distribution of an episode whose physics draw is ``physics``
         (its pose spread widens or narrows :attr:`initial_pose`)."""
@@ -147,8 +172,49 @@ class TaskSettings:
         self, state: BackendState, goal: np.ndarray, rng: np.random.Generator
     ) -> np.ndarray:
         """``[x̂−x*, ŷ−y*, θ̂−θ*, ẑ, F̂x, F̂y, q̂θ, F̂z]`` with the measurement noise."""
-        exact = np.concatenate([state.pose[:3] - goal, state.pose[3:], state.wrench])
+        pose = state.observed_pose
+        exact = np.concatenate([pose[:3] - goal, pose[3:], state.observed_wrench])
         return exact + rng.normal(0.0, 1.0, 8) * self._noise_std
+
+
+def check_grasp_error(grasp_error: Any, robot: str) -> np.ndarray | None:
+    """``grasp_error`` as a ``[x, y, yaw]`` std array (a scalar broadcasts), or ``None``;
+    ``ValueError`` unless each std is in ``[0, MAX_GRASP_ERROR_STD]`` and a robot holds the
+    part."""
+    if grasp_error is None:
+        return None
+    if robot == "free":
+        raise ValueError("grasp_error needs a robot holding the part; allowed: robot='panda'")
+    high = MAX_GRASP_ERROR_STD.tolist()
+    allowed = f"0 ≤ std ≤ {high} for [x, y, yaw] (mm, mm, rad)"
+    std = finite_vector("grasp_error", grasp_error, 3, allowed)
+    if np.any(std < 0) or np.any(std > MAX_GRASP_ERROR_STD):
+        raise ValueError(f"grasp_error={std.tolist()!r} is out of range; allowed: {allowed}")
+    return std
+
+
+def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = False) -> None:
+    """``ValueError`` if the simulator of ``backend`` (the single env's with ``single``, else
+    the vector env's batch) with ``settings.robot`` cannot simulate ``settings``' randomised
+    physics or defect kind."""
+    chosen = simulator(backend, single=single, robot=settings.robot)
+    cls = chosen.single if single else chosen.batch
+    robot = "" if settings.robot == "free" else f", robot={settings.robot!r}"
+    on = f"backend={backend!r}{robot}"
+    if settings.randomization is not None and not cls.supports_randomization:
+        raise ValueError(f"randomization is not supported on {on}")
+    kind = None if settings.defects is None else settings.defects[0]
+    if kind is not None and kind not in cls.defect_kinds:
+        if settings.robot != "free":
+            allowed = ", ".join(map(repr, sorted(cls.defect_kinds)))
+            raise ValueError(
+                f"defects={settings.defects!r} is not supported on {on}; allowed: {allowed}"
+            )
+        supported = taking_defect(kind)
+        raise ValueError(
+            f"defects={settings.defects!r} is not supported on {on}; allowed: "
+            f"the single env, or backend {', '.join(map(repr, supported))}"
+        )
 
 
 def setting(name: str) -> property:
@@ -174,6 +240,8 @@ class SettingsAttributes:
     defects = setting("defects")
     control_dt = setting("control_dt")
     physics_version = setting("physics_version")
+    robot = setting("robot")
+    grasp_error = setting("grasp_error")
 
 
 #: The keywords of :class:`TaskSettings` an env takes besides its socket.

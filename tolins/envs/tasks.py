@@ -15,7 +15,7 @@ from tolins.geometry.specs import (
     SocketSpec,
     with_clearance,
 )
-from tolins.physics.versions import VERSIONS
+from tolins.physics.versions import LATEST, VERSIONS
 
 ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
 #: The batched env of every id (``gymnasium.make_vec(..., vectorization_mode=
@@ -35,8 +35,10 @@ class Task:
             versions, :mod:`tolins.physics.versions`).
         domain: dm_control domain name (task ``insert``).
         socket: The (nominal) socket.
-        tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``.
+        tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``, ``robot``.
         defect_sigma: Bent-pin std (mm) re-sampled at every reset, or ``None``.
+        robot: What holds the workpiece (``"free"``, the paper's servos, or ``"panda"``).
+        versions: The physics versions it is registered in (``None``: every one).
     """
 
     name: str
@@ -44,6 +46,13 @@ class Task:
     socket: SocketSpec
     tags: tuple[str, ...]
     defect_sigma: float | None = None
+    robot: str = "free"
+    versions: tuple[int, ...] | None = None
+
+    @property
+    def physics_versions(self) -> tuple[int, ...]:
+        """The physics versions whose ids it has."""
+        return tuple(VERSIONS) if self.versions is None else self.versions
 
     @property
     def gym_id(self) -> str:
@@ -61,6 +70,8 @@ class Task:
             kwargs["defect_sigma"] = self.defect_sigma
         if version != 1:
             kwargs["physics_version"] = version
+        if self.robot != "free":
+            kwargs["robot"] = self.robot
         return kwargs
 
     @property
@@ -121,6 +132,29 @@ GRADE_TASKS: tuple[Task, ...] = tuple(
 #: Every preset: the paper's (``TASKS``), then the grades; gymnasium ids and dm_control
 #: domains are registered for each.
 PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
+
+
+def _on_panda(task: Task) -> Task:
+    """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), on the
+    newest physics only."""
+    return Task(
+        name=f"{task.name}Panda",
+        domain=f"{task.domain}_panda",
+        socket=task.socket,
+        tags=(*task.tags, "robot"),
+        defect_sigma=task.defect_sigma,
+        robot="panda",
+        versions=(LATEST,),
+    )
+
+
+#: The paper's workpieces and the 50 µm grades held by a Franka Panda: gymnasium ids
+#: ``tolins/{name}Panda-v2`` (no dm_control domains yet).
+ROBOT_TASKS: tuple[Task, ...] = tuple(
+    _on_panda(task) for task in TASKS + GRADE_TASKS if task in TASKS or "fit50" in task.tags
+)
+#: Every task that has gymnasium ids.
+GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS
 #: The generic ids by physics version; pass ``socket=`` (and any other keyword) to
 #: ``gymnasium.make``.
 GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in VERSIONS}
@@ -129,20 +163,21 @@ GENERIC_ID = GENERIC_IDS[1]
 
 def env_ids(*, generic: bool = True) -> tuple[str, ...]:
     """Every tolins gymnasium id, version by version: the presets' (the paper's, then the
-    grades), then the generic one (left out with ``generic=False``)."""
+    grades), the robot tasks', then the generic one (left out with ``generic=False``)."""
     ids = []
     for version in VERSIONS:
-        ids += [task.gym_id_of(version) for task in PRESETS]
+        ids += [task.gym_id_of(version) for task in GYM_TASKS if version in task.physics_versions]
         if generic:
             ids.append(GENERIC_IDS[version])
     return tuple(ids)
 
 
 def task_of(env_id: str) -> Task:
-    """The preset task of a tolins id of any physics version; ``ValueError`` otherwise."""
+    """The preset task (or robot task) of a tolins id of any physics version it has;
+    ``ValueError`` otherwise."""
     name, _, version = env_id.removeprefix("tolins/").rpartition("-v")
-    for task in PRESETS:
-        if task.name == name and version.isdigit() and int(version) in VERSIONS:
+    for task in GYM_TASKS:
+        if task.name == name and version.isdigit() and int(version) in task.physics_versions:
             return task
     raise ValueError(f"{env_id!r} is not a preset id; allowed: {', '.join(env_ids(generic=False))}")
 
@@ -164,8 +199,8 @@ def register_envs() -> None:
     """Register every preset (and the generic id) with gymnasium; safe to call twice."""
     entry_points = {"entry_point": ENTRY_POINT, "vector_entry_point": VECTOR_ENTRY_POINT}
     for version in VERSIONS:
-        for task in PRESETS:
-            if task.gym_id_of(version) not in gym.registry:
+        for task in GYM_TASKS:
+            if version in task.physics_versions and task.gym_id_of(version) not in gym.registry:
                 kwargs = task.env_kwargs_of(version)
                 gym.register(id=task.gym_id_of(version), kwargs=kwargs, **entry_points)
         if GENERIC_IDS[version] not in gym.registry:

@@ -26,13 +26,18 @@ from gymnasium.vector.utils import batch_space
 from tolins.envs.actions import check_action
 from tolins.envs.episode_state import RESET_OPTIONS, EpisodeState
 from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
-from tolins.envs.task_settings import TASK_KEYWORDS, TaskSettings, check_keywords
+from tolins.envs.task_settings import (
+    TASK_KEYWORDS,
+    TaskSettings,
+    check_capabilities,
+    check_keywords,
+)
 from tolins.envs.vector_views import EnvView, check_name, check_value
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int, is_seed
 from tolins.paper import A_MAX
-from tolins.physics import BatchPhysics, make_batch, simulator
-from tolins.physics.registry import taking_defect, with_capability
+from tolins.physics import BatchPhysics, make_batch
+from tolins.physics.registry import with_capability
 
 _AUTORESET = {mode.value: mode for mode in AutoresetMode}
 #: Every keyword ``InsertionVectorEnv`` takes.
@@ -206,7 +211,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self.backend_name = backend
         self.metadata = {**self.metadata, "autoreset_mode": _AUTORESET[mode]}
         self.render_mode = render_mode
-        _check_capabilities(self.settings, backend)
+        check_capabilities(self.settings, backend)
         self.physics: BatchPhysics | None = make_batch(
             backend,
             socket,
@@ -216,6 +221,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             num_threads=num_threads,
             device=device,
             persistent=render_mode is not None,
+            robot=self.settings.robot,
         )
         self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
@@ -330,6 +336,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         for i, plan in zip(ids.tolist(), plans, strict=True):
             self.physics.set_socket(i, plan.socket)
             plan.apply_physics(lambda draw, i=i: self.physics.set_physics(i, draw))
+            plan.apply_grasp(lambda grasp, i=i: self.physics.set_grasp(i, grasp))
         state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
@@ -410,21 +417,6 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self._renderers = {}
         physics, self.physics = self.physics, None
         physics.close()
-
-
-def _check_capabilities(settings: TaskSettings, backend: str) -> None:
-    """``ValueError`` if the batch of ``backend`` cannot simulate ``settings``' randomised
-    physics or defect kind."""
-    batch = simulator(backend).batch
-    if settings.randomization is not None and not batch.supports_randomization:
-        raise ValueError(f"randomization is not supported on backend={backend!r}")
-    kind = None if settings.defects is None else settings.defects[0]
-    if kind is not None and kind not in batch.defect_kinds:
-        supported = taking_defect(kind)
-        raise ValueError(
-            f"defects={settings.defects!r} is not supported on backend={backend!r}; allowed: "
-            f"the single env, or backend {', '.join(map(repr, supported))}"
-        )
 
 
 def _check_render_mode(render_mode: object, backend: str) -> None:

@@ -95,7 +95,7 @@ class ModelLayout:
         object.__setattr__(self, "pin_by_geom", pins)
 
 
-def _touch_addresses(model: mujoco.MjModel) -> list[int]:
+def touch_addresses(model: mujoco.MjModel) -> list[int]:
     """``sensordata`` address of each pin's touch sensor, pin by pin."""
     addresses = []
     while True:
@@ -109,7 +109,7 @@ def model_layout(model: mujoco.MjModel) -> ModelLayout:
     """The layout of ``model``, a model made by :func:`~tolins.mjcf.model.make_mjcf`;
     ``RuntimeError`` if it is not one (touch sensors missing or not contiguous, or the
     servos not in joint order)."""
-    touch = _touch_addresses(model)
+    touch = touch_addresses(model)
     if not touch or touch != list(range(touch[0], touch[0] + len(touch))):
         raise RuntimeError("the pins' touch sensors are missing or not stored contiguously")
     pose_joint = np.array([model.joint(name).qposadr[0] for name in POSE_JOINTS], dtype=np.intp)

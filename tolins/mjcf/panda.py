@@ -201,15 +201,18 @@ def handle_centre_height() -> float:
     return PIN_LENGTH + CARRIER_THICKNESS + float(HANDLE[2])
 
 
-def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> mujoco.MjSpec:
+def panda_world(
+    socket: SocketSpec, base: tuple[float, float, float] = BASE, *, board_body: bool = True
+) -> mujoco.MjSpec:
     """``socket``'s board and workpiece with the Panda holding the part: the workpiece on a
     free joint (its servos gone) with a handle on its carrier, gravity on, the weld
     :data:`HOLD` (inactive until set) from the part to the hand, and the arm at ``base``.
     The arm's links collide with nothing of the task; the fingers with the part only (the
     board cannot be reached by them with a part in the hand). The sensors
     :data:`WRIST_FORCE` and :data:`WRIST_TORQUE` sit at the flange, beside the model's own
-    ``force``/``torque`` at the pins (the true contact wrench on the part)."""
-    world = mujoco.MjSpec.from_string(make_mjcf(socket))
+    ``force``/``torque`` at the pins (the true contact wrench on the part). ``board_body``
+    as :func:`~tolins.mjcf.model.make_mjcf`'s."""
+    world = mujoco.MjSpec.from_string(make_mjcf(socket, board_body=board_body))
     workpiece = world.body("workpiece")
     for joint in list(workpiece.joints):
         world.delete(joint)
@@ -246,6 +249,13 @@ def panda_world(socket: SocketSpec, base: tuple[float, float, float] = BASE) -> 
         if finger:  # the task's stiff contacts: the files' soft pads let the part creep
             geom.friction, geom.solref, geom.solimp = GRIP_FRICTION, _SOLREF, _SOLIMP
     world.attach(arm, prefix=PREFIX, frame=world.worldbody.add_frame(pos=base))
+    # The real gripper's fingers move as one (a rack on one motor): coupled, the part sits
+    # midway between them instead of wherever the two fingers' pushes happen to balance.
+    left, right = (PREFIX + name for name in FINGER_JOINTS)
+    coupling = world.add_equality(
+        type=mujoco.mjtEq.mjEQ_JOINT, name="fingers", name1=left, name2=right
+    )
+    coupling.data[:5] = [0.0, 1.0, 0.0, 0.0, 0.0]
     for name, kind in (
         (WRIST_FORCE, mujoco.mjtSensor.mjSENS_FORCE),
         (WRIST_TORQUE, mujoco.mjtSensor.mjSENS_TORQUE),

@@ -15,8 +15,12 @@ module                    what it holds
 ``kinematic``             the paper's simulator: ``KinematicBatch`` and its batch of one
 ``warp``                  ``WarpBatch`` on MuJoCo Warp (``pip install 'tolins[warp]'``)
 ``randomization``         randomised physics drawn per episode and applied to a model
-``registry``              the simulators by name (``SIMULATORS``, ``make_backend``,
-                          ``make_batch``)
+``arm``                   the Panda's grasp, forward kinematics, wrist sensing and
+                          operational-space law
+``panda``                 ``PandaBatch`` and ``PandaBackend``: a Franka Panda holding the
+                          workpiece (``robot="panda"``)
+``registry``              the simulators by name and robot (``SIMULATORS``, ``ROBOTS``,
+                          ``make_backend``, ``make_batch``)
 ========================  ====================================================================
 
 The layer imports mjcf, geometry and the base modules only.
@@ -26,6 +30,7 @@ from tolins.physics.protocol import Backend, BackendState, BatchPhysics, BatchSt
 from tolins.physics.registry import (
     BACKENDS,
     BATCH_BACKENDS,
+    ROBOTS,
     SIMULATORS,
     Simulator,
     make_backend,
@@ -36,6 +41,7 @@ from tolins.physics.registry import (
 __all__ = [
     "BACKENDS",
     "BATCH_BACKENDS",
+    "ROBOTS",
     "SIMULATORS",
     "Backend",
     "BackendState",

@@ -3,12 +3,17 @@
 :class:`Arm` reads a world of :func:`tolins.mjcf.panda.panda_world`: the grip site's
 Jacobian, damped-least-squares IK within the joint limits, and the operational-space law
 
-    τ = Jᵀ Λ (Kp e + Kd (v* − v)) + N (M (kq (q₀ − q) − 2 √kq q̇)) + b(q, q̇),
+    τ = Jᵀ (Λ ([clip(Kp e_p), Kp e_r] + Kd (v* − v)) − m g) + N (M (kq (q₀ − q) − 2 √kq q̇)) + b,
 
-with ``e`` the grip site's position (mm) and rotation (rad) error, ``v*`` the commanded
+with ``e = [e_p, e_r]`` the grip site's position (mm) and rotation (rad) error (the
+position error's pull clipped on each of x, y and z to the force limit of :class:`Gains`
+over that axis's task inertia ``Λ_ii``: a blocked arm pushes with a bounded force, as the
+servos do), ``v*``
+the commanded
 twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-space inertia, ``N = I − Jᵀ J̄ᵀ`` the null space of
 the dynamically consistent inverse ``J̄ = M⁻¹ Jᵀ Λ`` (a posture ``q₀`` held there), ``b``
-gravity and Coriolis (MuJoCo's ``qfrc_bias``), clipped to the Franka's torque limits.
+gravity and Coriolis (MuJoCo's ``qfrc_bias``), ``m g`` the weight of the part held at the
+grip site (``payload``, as a real Franka is told its load), clipped to the Franka's torque limits.
 :func:`place_grasp` puts the hand around the part's handle at a pose and welds the part
 to it while the fingers close. What a robot knows of the part: :func:`nominal_pose` (the
 grip site's forward kinematics and the nominal grasp) and :func:`wrist_wrench` (the wrist
@@ -17,12 +22,14 @@ sensor with the weight of the hand and the part removed).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from tolins.mjcf import FORCE_SCALE
+from tolins.mjcf.model import FORCE_LIMIT
 from tolins.mjcf.panda import (
     ARM_JOINTS,
     ARM_MOTORS,
@@ -41,17 +48,28 @@ from tolins.mjcf.panda import (
     handle_centre_height,
 )
 
-#: The Panda's usual ready posture (rad): the IK's start and the null-space posture's.
-READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+#: The IK's start (rad): of the grasps over the board's centre reached from 300 random
+#: starts within the joint limits, the one farthest from every limit (0.63 rad). Grasps
+#: anywhere in the workspace lie within 0.33 rad of it, so IK stays on this branch.
+READY = np.array([-1.4786, 1.0651, 1.3737, -2.4438, -1.3635, 0.5028, 0.8614])
 
 
 @dataclass(frozen=True)
 class Gains:
     """The law's gains: ``stiffness`` (s⁻², per task axis: x, y, z, then rotations), the
-    damping critical for a unit mass (``2 √Kp``), and the posture's ``null`` (s⁻²)."""
+    damping critical for a unit mass (``2 √Kp``), the posture's ``null`` (s⁻²), and the
+    largest spring force (mN, along each of x, y and z) the law pushes with: 20 N, half
+    what the fingers' friction holds (2 × 20 N closing, μ = 1), four times the free body's
+    servo limit (:data:`~tolins.mjcf.model.FORCE_LIMIT`: at 5 N the arm cannot overcome
+    its own pins' friction on the board while it presses). Its torques are not limited
+    but by the motors: the wrist's inertia needs far more than the free body's yaw servo.
 
-    stiffness: tuple[float, ...] = (2000.0,) * 6
+    ``benchmarks/panda_validation.py`` measured the defaults against 2,000 s⁻² and 5 N.
+    """
+
+    stiffness: tuple[float, ...] = (20000.0,) * 6
     null: float = 20.0
+    force_limit: float = 4 * FORCE_LIMIT
 
     @property
     def damping(self) -> np.ndarray:
@@ -60,9 +78,8 @@ class Gains:
 
 def grip_rotation(yaw: float) -> np.ndarray:
     """The grip frame pointing down with its x axis at ``yaw`` (the fingers close along y)."""
-    x = np.array([np.cos(yaw), np.sin(yaw), 0.0])
-    z = np.array([0.0, 0.0, -1.0])
-    return np.column_stack([x, np.cross(z, x), z])
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])  # columns x, z × x, z
 
 
 class Arm:
@@ -84,6 +101,7 @@ class Arm:
         self.wrist_sensors = [model.sensor(name).adr[0] for name in (WRIST_FORCE, WRIST_TORQUE)]
         self._jp, self._jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
         self._mass = np.zeros((model.nv, model.nv))
+        self._block = np.ix_(self.dof, self.dof)
 
     def error(self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """``[position error (mm), rotation error (rad)]`` of the grip site to ``pos``, ``rot``."""
@@ -112,10 +130,17 @@ class Arm:
             mujoco.mj_comPos(self.model, data)
             error = self.error(data, pos, rot) * scale
             if np.linalg.norm(error) < 1e-12:
-                break
+                return data.qpos[self.qpos].copy()
             jac = self.jacobian(data) * scale[:, None]
             step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-8 * np.eye(6), error)
             data.qpos[self.qpos] = np.clip(data.qpos[self.qpos] + step, *self.range.T)
+        mujoco.mj_kinematics(self.model, data)
+        left = np.linalg.norm(self.error(data, pos, rot) * scale)
+        if left > 1e-6:
+            raise RuntimeError(
+                f"no joint angles within the limits put the hand at {pos.tolist()} "
+                f"(IK left {left:.3g}); allowed: a grasp inside the workspace"
+            )
         return data.qpos[self.qpos].copy()
 
     def torques(
@@ -139,11 +164,13 @@ class Arm:
         rot: np.ndarray,
         twist: np.ndarray,
         posture: np.ndarray,
+        payload: float = 0.0,
     ) -> np.ndarray:
         """:meth:`torques` of every simulation in ``datas`` (of this arm's model) at once,
         ``(n, 7)``: the Jacobians, mass matrices and errors read per simulation, the law's
         algebra in one stacked numpy pass (``pos`` ``(n, 3)``, ``rot`` ``(n, 3, 3)``,
-        ``twist`` ``(n, 6)``, ``posture`` ``(n, 7)``)."""
+        ``twist`` ``(n, 6)``, ``posture`` ``(n, 7)``); ``payload``: the mass (kg) held at
+        the grip site, whose weight the law holds up."""
         jac = np.stack([self.jacobian(data) for data in datas])
         mass = np.stack([self._arm_mass(data) for data in datas])
         error = np.stack(
@@ -157,13 +184,22 @@ class Arm:
         task = np.linalg.inv(jac @ inverse @ jac_t)
         velocity = np.einsum("nij,nj->ni", jac, qdot)
         stiffness = np.asarray(self.gains.stiffness)
-        wrench = stiffness * error + self.gains.damping * (twist - velocity)
+        gains = self.gains
+        pull = stiffness * error
+        # The position error's pull along each axis within the limit over that axis's
+        # task inertia; Λ then maps the clipped pull as a whole, so its cross terms still
+        # keep the hand's orientation.
+        most = gains.force_limit / np.diagonal(task, axis1=1, axis2=2)[:, :3]
+        pull[:, :3] = np.clip(pull[:, :3], -most, most)
+        spring = np.einsum("nij,nj->ni", task, pull)
+        damper = np.einsum("nij,nj->ni", task, gains.damping * (twist - velocity))
+        held = np.r_[-payload * GRAVITY, np.zeros(3)]
         consistent = inverse @ jac_t @ task
         null = np.eye(len(self.dof)) - jac_t @ consistent.transpose(0, 2, 1)
         rate = self.gains.null
         hold = np.einsum("nij,nj->ni", mass, rate * (posture - q) - 2.0 * np.sqrt(rate) * qdot)
         tau = (
-            np.einsum("nij,nj->ni", jac_t, np.einsum("nij,nj->ni", task, wrench))
+            np.einsum("nij,nj->ni", jac_t, spring + damper + held)
             + np.einsum("nij,nj->ni", null, hold)
             + bias
         )
@@ -172,21 +208,30 @@ class Arm:
     def _arm_mass(self, data: mujoco.MjData) -> np.ndarray:
         """The arm's ``(7, 7)`` block of the joint-space inertia (a copy)."""
         mujoco.mj_fullM(self.model, data, self._mass)
-        return self._mass[np.ix_(self.dof, self.dof)]
+        return self._mass[self._block]
 
 
 def place_grasp(
-    model: mujoco.MjModel, data: mujoco.MjData, arm: Arm, pose: np.ndarray
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    arm: Arm,
+    pose: np.ndarray,
+    offset: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Reset ``data`` with the part at ``pose`` ``[x, y, theta, z]`` (tips' height z), the
-    hand around its handle (fingers 1 mm off each side) and the weld :data:`HOLD` on,
-    holding the part where it is in the hand. Returns the grip site's target position,
+    """Reset ``data`` with the hand around the handle of a part at ``pose`` ``[x, y, theta,
+    z]`` (tips' height z; fingers 1 mm off each side) and the weld :data:`HOLD` on, holding
+    the part where it is in the hand. With ``offset`` ``[dx, dy, dyaw]`` (mm, rad, in the
+    grip frame) the part sits that far off in the hand: at ``pose`` moved by the offset,
+    where the robot believes it at ``pose``. Returns the grip site's target position,
     rotation and the posture (the IK's joint angles)."""
     mujoco.mj_resetData(model, data)
     x, y, theta, z = (float(v) for v in pose)
+    dx, dy, dyaw = (0.0, 0.0, 0.0) if offset is None else (float(v) for v in offset)
+    c, s = np.cos(theta), np.sin(theta)
     part = model.joint("workpiece").qposadr[0]
-    data.qpos[part : part + 3] = x, y, z
-    data.qpos[part + 3 : part + 7] = np.cos(theta / 2), 0.0, 0.0, np.sin(theta / 2)
+    data.qpos[part : part + 3] = x + c * dx - s * dy, y + s * dx + c * dy, z
+    yaw = theta + dyaw
+    data.qpos[part + 3 : part + 7] = np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)
     target = np.array([x, y, z + handle_centre_height()])
     rot = grip_rotation(theta)
     posture = arm.solve_ik(data, target, rot)

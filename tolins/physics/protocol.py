@@ -35,12 +35,27 @@ class BackendState:
         peak_force: Largest summed normal force (N) of the contacts between the board
             and the pins seen during the step.
         error: ``None``, or what went wrong in the simulator (the state is then invalid).
+        sensed_pose: What the robot's own sensing says the pose is (a robot's forward
+            kinematics and nominal grasp), or ``None``: the true ``pose``.
+        sensed_wrench: What its wrist sensor says ``wrench`` is, or ``None``: the true one.
     """
 
     pose: np.ndarray
     wrench: np.ndarray
     peak_force: float
     error: str | None = None
+    sensed_pose: np.ndarray | None = None
+    sensed_wrench: np.ndarray | None = None
+
+    @property
+    def observed_pose(self) -> np.ndarray:
+        """The pose the observation measures: the sensed one where a robot senses it."""
+        return self.pose if self.sensed_pose is None else self.sensed_pose
+
+    @property
+    def observed_wrench(self) -> np.ndarray:
+        """The wrench the observation measures: the sensed one where a robot senses it."""
+        return self.wrench if self.sensed_wrench is None else self.sensed_wrench
 
 
 @dataclass(frozen=True)
@@ -53,17 +68,22 @@ class BatchState:
         peak_force: ``(n,)`` largest summed normal pin force during the step (N).
         errors: ``n`` entries: ``None``, or what went wrong in that simulation (its row
             is then invalid, as ``BackendState.error``).
+        sensed_pose: ``(n, 4)``, as ``BackendState.sensed_pose``, or ``None``.
+        sensed_wrench: ``(n, 4)``, as ``BackendState.sensed_wrench``, or ``None``.
     """
 
     pose: np.ndarray
     wrench: np.ndarray
     peak_force: np.ndarray
     errors: tuple[str | None, ...] | None = None
+    sensed_pose: np.ndarray | None = None
+    sensed_wrench: np.ndarray | None = None
 
     def row(self, i: int) -> BackendState:
         """Row ``i`` as the single env's :class:`BackendState`."""
         error = None if self.errors is None else self.errors[i]
-        return BackendState(self.pose[i], self.wrench[i], float(self.peak_force[i]), error)
+        sensed = (None if a is None else a[i] for a in (self.sensed_pose, self.sensed_wrench))
+        return BackendState(self.pose[i], self.wrench[i], float(self.peak_force[i]), error, *sensed)
 
 
 class Capabilities:

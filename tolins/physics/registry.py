@@ -13,6 +13,7 @@ from typing import Any
 from tolins.geometry.specs import SocketSpec
 from tolins.physics.kinematic import KinematicBackend, KinematicBatch
 from tolins.physics.mujoco import MujocoBackend, MujocoBatch
+from tolins.physics.panda import PandaBackend, PandaBatch
 from tolins.physics.protocol import Backend, BatchPhysics
 from tolins.physics.warp import WarpBatch
 
@@ -47,11 +48,31 @@ SIMULATORS: dict[str, Simulator] = {
 BACKENDS = tuple(name for name, s in SIMULATORS.items() if s.single is not None)
 #: The simulators of the vector env.
 BATCH_BACKENDS = tuple(SIMULATORS)
+#: What holds the workpiece, and its simulators by name: ``"free"``, the paper's ideal
+#: servos on a free-floating body (every simulator above); ``"panda"``, a Franka Panda
+#: holding it (:mod:`tolins.physics.panda`, MuJoCo only).
+ROBOTS: dict[str, dict[str, Simulator]] = {
+    "free": SIMULATORS,
+    "panda": {"mujoco": Simulator("mujoco", PandaBatch, PandaBackend)},
+}
 
 
-def simulator(name: object, *, single: bool = False) -> Simulator:
-    """The simulator ``name`` (of the single env with ``single``); ``ValueError`` naming the
-    allowed ones otherwise."""
+def check_robot(robot: object) -> str:
+    """``robot`` if it is one of :data:`ROBOTS`; ``ValueError`` naming them otherwise."""
+    if not isinstance(robot, str) or robot not in ROBOTS:
+        raise ValueError(f"robot={robot!r}; allowed: {', '.join(map(repr, ROBOTS))}")
+    return robot
+
+
+def simulator(name: object, *, single: bool = False, robot: str = "free") -> Simulator:
+    """The simulator ``name`` (of the single env with ``single``) of ``robot``; ``ValueError``
+    naming the allowed ones otherwise."""
+    if check_robot(robot) != "free":
+        names = tuple(n for n, s in ROBOTS[robot].items() if s.single is not None or not single)
+        if name not in names:
+            on = ", ".join(map(repr, names))
+            raise ValueError(f"backend={name!r} with robot={robot!r}; allowed: {on}")
+        return ROBOTS[robot][name]
     names = BACKENDS if single else BATCH_BACKENDS
     if not isinstance(name, str) or name not in names:
         allowed = sorted(names) if single else ", ".join(map(repr, names))
@@ -76,10 +97,12 @@ def taking_defect(kind: str) -> tuple[str, ...]:
 
 
 def make_backend(
-    name: str, spec: SocketSpec, control_dt: float, physics_version: int = 1
+    name: str, spec: SocketSpec, control_dt: float, physics_version: int = 1, robot: str = "free"
 ) -> Backend:
-    """The single env's backend ``name`` for ``spec`` (:mod:`tolins.physics.versions`)."""
-    return simulator(name, single=True).single(spec, control_dt, physics_version=physics_version)
+    """The single env's backend ``name`` for ``spec`` (:mod:`tolins.physics.versions`) with
+    ``robot`` holding the workpiece."""
+    chosen = simulator(name, single=True, robot=robot)
+    return chosen.single(spec, control_dt, physics_version=physics_version)
 
 
 def make_batch(
@@ -92,14 +115,15 @@ def make_batch(
     num_threads: int | None = None,
     device: str | None = None,
     persistent: bool = False,
+    robot: str = "free",
 ) -> BatchPhysics:
-    """The batch ``name`` of ``num_envs`` copies of ``socket``.
+    """The batch ``name`` of ``num_envs`` copies of ``socket``, ``robot`` holding each.
 
     ``num_threads`` and ``persistent`` (every simulation's whole data kept, for drawing)
     are hints that a simulator without threads or without per-simulation data ignores;
     ``device`` names hardware, so a simulator that runs on none refuses it.
     """
-    cls = simulator(name).batch
+    cls = simulator(name, robot=robot).batch
     if device is not None and "device" not in cls.batch_options:
         on = " or ".join(map(repr, taking("device")))
         raise ValueError(f"device={device!r} is for backend={on} only; got backend={name!r}")

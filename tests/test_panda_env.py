@@ -1,0 +1,124 @@
+"""The ``robot="panda"`` envs: ids, the gymnasium contract, the vector env, what is sensed."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import tolins
+from tolins.envs import InsertionEnv
+from tolins.envs.tasks import ROBOT_TASKS, TASKS, env_ids, task_of
+from tolins.physics.panda import DROPPED, update_plan
+from tolins.policies import SafeExpert
+
+PANDA = "tolins/Circle2x2Panda-v2"
+QUIET = {"measurement_noise": 0.0}
+
+
+@pytest.fixture(scope="module")
+def env() -> InsertionEnv:
+    return gym.make(PANDA, **QUIET).unwrapped
+
+
+def test_every_paper_workpiece_and_50um_grade_has_a_panda_id_on_v2_only() -> None:
+    names = [task.name for task in ROBOT_TASKS]
+    assert names[: len(TASKS)] == [f"{task.name}Panda" for task in TASKS]
+    assert {"Circle2x2Fit50Panda", "SquareFit50Panda", "HexagonFit50Panda"} <= set(names)
+    for task in ROBOT_TASKS:
+        assert "robot" in task.tags and task.robot == "panda"
+        assert task.gym_id_of(2) in env_ids() and task.gym_id_of(1) not in env_ids()
+        assert task_of(task.gym_id_of(2)) is task
+        assert gym.spec(task.gym_id_of(2)).kwargs["robot"] == "panda"
+    with pytest.raises(ValueError, match="not a preset id"):
+        task_of("tolins/Circle2x2Panda-v1")
+
+
+def test_check_env_passes_on_a_panda_id(env: InsertionEnv) -> None:
+    check_env(env, skip_render_check=True)
+
+
+def test_the_observation_measures_what_the_robot_senses_and_info_holds_the_truth(env) -> None:
+    observation, info = env.reset(seed=3)
+    sensed, true = info["sensed_pose"], info["pose"]
+    goal = info["goal"]
+    np.testing.assert_array_equal(observation[:3], sensed[:3] - goal)
+    assert observation[3] == sensed[3]
+    np.testing.assert_array_equal(observation[4:], info["sensed_wrench"])
+    # The grasp settles a fraction of a mm off the nominal one: sensed is not the truth.
+    offset = np.abs(sensed - true)[[0, 1, 3]]
+    assert 0 < offset.max() < 0.3
+    observation, _, _, _, info = env.step(np.array([0.0, 0.0, 0.0, -2.5]))
+    assert info["sensed_pose"][3] < sensed[3] - 0.4  # it went down about 0.625 mm
+    assert "grasp_error" not in info
+
+
+def test_the_safe_expert_inserts_and_success_is_judged_on_the_true_pose(env) -> None:
+    expert = SafeExpert()
+    observation, info = env.reset(seed=0)
+    done = False
+    while not done:
+        observation, _, terminated, truncated, info = env.step(expert(observation))
+        done = terminated or truncated
+    assert info["success"] and terminated
+    assert info["pose"][3] <= -env.success_depth
+    assert env.settings.is_success(env._episode.state, env.socket)
+
+
+def test_a_grasp_error_is_drawn_per_episode_off_by_default_and_ground_truth_in_info() -> None:
+    env = gym.make(PANDA, grasp_error=[0.3, 0.3, 0.02], **QUIET).unwrapped
+    errors = []
+    for seed in (1, 2, 3):
+        _, info = env.reset(seed=seed)
+        error = info["grasp_error"]
+        errors.append(error)
+        theta = info["sensed_pose"][2]
+        c, s = np.cos(theta), np.sin(theta)
+        world = info["pose"][:2] - info["sensed_pose"][:2]
+        along, across = c * world[0] + s * world[1], -s * world[0] + c * world[1]
+        # Along the pads the part stays off as drawn (the closing drags it part way back);
+        # across them the parallel fingers centre it.
+        assert np.sign(along) == np.sign(error[0]) and abs(along) > abs(error[0]) / 3
+        assert abs(across) < 0.05 < abs(error[1])
+    assert not np.array_equal(errors[0], errors[1])
+    assert np.all(np.abs(errors) <= 3 * np.array([0.3, 0.3, 0.02]))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"robot": "ur5"}, "robot='ur5'; allowed: 'free', 'panda'"),
+        ({"robot": "panda", "backend": "kinematic"}, "backend='kinematic' with robot='panda'"),
+        ({"grasp_error": 0.1}, "grasp_error needs a robot"),
+        ({"robot": "panda", "grasp_error": [2.0, 0, 0]}, "grasp_error=.* is out of range"),
+        ({"robot": "panda", "randomization": "default"}, "randomization is not supported"),
+        ({"robot": "panda", "defects": ("blocked", None)}, "not supported on .*robot='panda'"),
+    ],
+)
+def test_bad_robot_settings_raise_naming_what_is_allowed(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        InsertionEnv(tolins.CircularSocket(2, 2), physics_version=2, **kwargs)
+
+
+def test_the_vector_env_steps_each_panda_as_the_single_env_does(env: InsertionEnv) -> None:
+    vector = tolins.make_vec(PANDA, 2, **QUIET)
+    observations, _ = vector.reset(seed=[5, 6])
+    for i in range(2):
+        single, _ = env.reset(seed=5 + i)
+        np.testing.assert_array_equal(single, observations[i])
+    actions = np.array([[1.0, 0.0, 0.05, -2.5], [-1.0, 2.0, 0.0, -1.0]])
+    stepped, *_ = vector.step(actions)
+    for i in range(2):
+        env.reset(seed=5 + i)
+        single, *_ = env.step(actions[i])
+        np.testing.assert_array_equal(single, stepped[i])
+    vector.close()
+
+
+def test_the_law_is_updated_on_its_period_and_the_contacts_read_on_their_chunks() -> None:
+    plan = update_plan(250, 5, 2)
+    assert sum(steps for steps, _, _ in plan) == 250
+    assert sum(update for _, update, _ in plan) == 125  # 500 Hz on 1 ms steps
+    assert [i for i, (_, _, read) in enumerate(plan) if read] == [24, 49, 74, 99, 124]
+    assert DROPPED > 1.0  # far beyond how the grasp settles

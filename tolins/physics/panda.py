@@ -1,0 +1,384 @@
+"""A Franka Panda holding the workpiece: the ``robot="panda"`` simulations of the envs.
+
+Each simulation is a world of :func:`tolins.mjcf.panda.panda_world`: the socket's board,
+the workpiece on a free joint with a handle, and the arm holding it by friction between
+its fingers. A control step takes the free body's action ``[ux, uy, uθ, uz]`` (mm/s, rad/s)
+as a twist of the grip site and tracks it with the operational-space law of
+:class:`~tolins.physics.arm.Arm`, updated every :data:`LAW_RATE`-th of a second (the joint
+torques held between updates while MuJoCo steps on).
+
+The law's target moves with the commanded twist and is kept within one control step's
+travel at full speed (:data:`~tolins.paper.A_MAX` × the control period, per axis) of where
+the robot's forward kinematics put the grip site: a blocked arm pushes with the law's
+stiffness over that lag, not more, as the free body's servos push with at most their
+force limit. Unlike the servos, the arm is compliant: it does not stop at the first
+contact but presses until the law's force balances the board's, and it lags its target
+while it moves (``benchmarks/panda_validation.py`` measures both).
+
+A reset puts the hand around the handle where the part is meant to be (IK), welds the part
+to the hand while the fingers close for :data:`SETTLE` s, then releases the weld: from
+there friction alone holds it. A grasp error (``set_grasp``) puts the part off in the hand
+by ``[dx, dy, dyaw]`` (mm, rad, in the grip frame) where the robot believes it nominal.
+
+What a simulation reports (:class:`~tolins.physics.protocol.BatchState`): the part's true
+pose and the board's true push on its pins (``pose``, ``wrench``, ``peak_force``, as the
+free body's), and what the robot senses: the pose from the grip site's forward kinematics
+and the nominal grasp (``sensed_pose``) and the wrist sensor's wrench with the weight of
+the hand and the part removed (``sensed_wrench``); the observation measures the sensed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+import math
+
+import mujoco
+import numpy as np
+
+from tolins.geometry.defects import DEFECT_KINDS
+from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import check_int
+from tolins.mjcf import FORCE_SCALE
+from tolins.mjcf.layout import touch_addresses
+from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
+from tolins.mjcf.panda import GRAVITY, HOLD, panda_world
+from tolins.paper import A_MAX
+from tolins.physics.arm import Arm, Gains, grip_rotation, nominal_pose, place_grasp, wrist_wrench
+from tolins.physics.compiled import SocketCache
+from tolins.physics.protocol import BackendState, BatchState, Capabilities
+from tolins.physics.randomization import PhysicsDraw
+from tolins.physics.schedule import contact_chunks, control_plan
+from tolins.physics.servo import simulation_fault
+from tolins.physics.versions import physics_version as physics_version_of
+
+#: How often the law is updated (Hz); the real Panda's torque interface runs at 1 kHz.
+LAW_RATE = 500
+#: The closing force of each finger (N).
+GRIP_FORCE = 20.0
+#: Seconds the weld holds the part while the fingers close at a reset.
+SETTLE = 0.6
+#: How far (mm, on any of x, y, z) the part may be from where the robot believes it before
+#: a step reports it lost from the hand (a fault: the episode ends).
+DROPPED = 3.0
+
+
+def compile_panda_world(socket: SocketSpec, physics_version: int = 2) -> mujoco.MjModel:
+    """The compiled Panda world of ``socket`` for a physics version (its board in the world
+    body from version 2 on, :mod:`tolins.physics.versions`)."""
+    version = physics_version_of(physics_version)
+    return panda_world(socket, board_body=not version.board_in_world).compile()
+
+
+def check_law_rate(model: mujoco.MjModel, law_rate: object) -> int:
+    """The physics steps between two updates of the law at ``law_rate`` Hz; ``ValueError``
+    unless the law's period is a whole number of the model's physics steps."""
+    allowed = "a rate whose period is a whole number of physics steps, e.g. 250, 500, 1000"
+    if isinstance(law_rate, bool) or not isinstance(law_rate, int) or law_rate <= 0:
+        raise ValueError(f"law_rate={law_rate!r}; allowed: {allowed}")
+    steps = 1.0 / (law_rate * model.opt.timestep)
+    if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
+        raise ValueError(
+            f"law_rate={law_rate} Hz is not a whole number of {model.opt.timestep * 1e3:g} ms "
+            f"physics steps; allowed: {allowed}"
+        )
+    return round(steps)
+
+
+@functools.lru_cache(maxsize=64)
+def update_plan(nstep: int, checks: int, every: int) -> tuple[tuple[int, bool, bool], ...]:
+    """One control step of ``nstep`` physics steps as segments ``(steps, update, read)``:
+    the law updated before a segment that starts on a multiple of ``every`` steps, the
+    contacts read after one that ends a contact chunk (:func:`contact_chunks`)."""
+    ends = np.cumsum(contact_chunks(nstep, checks)).tolist()
+    cuts = sorted(set(range(0, nstep, every)) | set(ends) | {0})
+    bounds = [*cuts, nstep] if cuts[-1] != nstep else cuts
+    return tuple(
+        (end - start, start % every == 0, end in ends) for start, end in itertools.pairwise(bounds)
+    )
+
+
+class PandaSimulations:
+    """Panda worlds of one socket family, each a model and a data it does not own, reset
+    and stepped together.
+
+    Args:
+        arm: The arm of the family's nominal model (every model of the family has its
+            addresses and kinematic tree).
+        models: Each simulation's model.
+        datas: Each simulation's data.
+        control_dt: Control period (s).
+        law_rate: Updates of the law per second (:func:`check_law_rate`).
+        contact_checks: Contact-force reads per control step, as the free body's.
+    """
+
+    def __init__(
+        self,
+        arm: Arm,
+        models: list[mujoco.MjModel],
+        datas: list[mujoco.MjData],
+        control_dt: float,
+        law_rate: int = LAW_RATE,
+        contact_checks: int | None = None,
+    ) -> None:
+        self.arm, self.models, self.datas = arm, models, datas
+        model = arm.model
+        self.every = check_law_rate(model, law_rate)
+        self.nstep, self.checks = control_plan(model, control_dt, contact_checks)
+        self.control_dt = control_dt
+        n = len(datas)
+        self.target = np.zeros((n, 3))
+        self.yaw = np.zeros(n)
+        self.posture = np.zeros((n, len(arm.dof)))
+        self.grasp = np.zeros((n, 3))
+        touch = touch_addresses(model)
+        self._touch = slice(touch[0], touch[-1] + 1)
+        self._force = int(model.sensor(FORCE_SENSOR).adr[0])
+        self._torque = int(model.sensor(TORQUE_SENSOR).adr[0])
+        self._site = model.site("ft_site").id
+        self._pins_weight = -float(model.body_subtreemass[model.body("pins").id]) * GRAVITY
+        workpiece = model.body("workpiece").id
+        self._held_mass = float(model.body_subtreemass[workpiece])
+        self._part = int(model.joint("workpiece").qposadr[0])
+        self._hold = model.equality(HOLD).id
+        self._lag = A_MAX[[0, 1, 3]] * control_dt
+        self._turn_lag = float(A_MAX[2]) * control_dt
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error), let the
+        fingers close with the weld on, release the weld: the state then. One simulation
+        after another: the weld's hold is set in the model, which simulations may share."""
+        settle = round(SETTLE / self.arm.model.opt.timestep)
+        still = np.zeros((1, 6))
+        for k, i in enumerate(ids.tolist()):
+            model, data = self.models[i], self.datas[i]
+            target, rot, posture = place_grasp(model, data, self.arm, poses[k], self.grasp[i])
+            self.target[i], self.posture[i] = target, posture
+            self.yaw[i] = math.atan2(rot[1, 0], rot[0, 0])
+            data.ctrl[self.arm.finger_motors] = -GRIP_FORCE / FORCE_SCALE
+            for start in range(0, settle, self.every):
+                self._update_law(ids[k : k + 1], still)
+                mujoco.mj_step(model, data, nstep=min(self.every, settle - start))
+            data.eq_active[self._hold] = False
+            mujoco.mj_forward(model, data)
+        return self.state(ids, self._summed_touch(ids), None)
+
+    def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
+        """Track ``velocities[k]`` ``[ux, uy, uθ, uz]`` with simulation ``ids[k]`` for one
+        control period."""
+        v = np.asarray(velocities, dtype=float)
+        twist = np.zeros((len(ids), 6))
+        twist[:, :2], twist[:, 2], twist[:, 5] = v[:, :2], v[:, 3], v[:, 2]
+        before = [self._warnings(i) for i in ids.tolist()]
+        self._anchor(ids)
+        timestep = self.arm.model.opt.timestep
+        peak = np.zeros(len(ids))
+        for steps, update, read in update_plan(self.nstep, self.checks, self.every):
+            if update:
+                span = self.every * timestep
+                self.target[ids] += twist[:, :3] * span
+                self.yaw[ids] += twist[:, 5] * span
+                self._update_law(ids, twist)
+            for i in ids.tolist():
+                mujoco.mj_step(self.models[i], self.datas[i], nstep=steps)
+            if read:
+                peak = np.maximum(peak, self._summed_touch(ids))
+        state = self.state(ids, peak, None)
+        faults = []
+        for k, (count, i) in enumerate(zip(before, ids.tolist(), strict=True)):
+            data = self.datas[i]
+            fault = simulation_fault(count, data.warning.number.tolist(), data.qpos, data.qvel)
+            slip = float(np.max(np.abs(state.sensed_pose[k] - state.pose[k])[[0, 1, 3]]))
+            if fault is None and slip > DROPPED:
+                fault = f"the part slipped {slip:.1f} mm from where the hand holds it"
+            faults.append(fault)
+        return dataclasses.replace(state, errors=tuple(faults))
+
+    def _warnings(self, i: int) -> int:
+        return sum(self.datas[i].warning.number.tolist())
+
+    def _anchor(self, ids: np.ndarray) -> None:
+        """Keep each target within one control step's travel of the grip site now."""
+        for i in ids.tolist():
+            data = self.datas[i]
+            site = data.site_xpos[self.arm.site]
+            self.target[i] = np.clip(self.target[i], site - self._lag, site + self._lag)
+            frame = data.site_xmat[self.arm.site].reshape(3, 3)
+            yaw = math.atan2(frame[1, 0], frame[0, 0])
+            turn = math.remainder(self.yaw[i] - yaw, math.tau)
+            self.yaw[i] = yaw + min(max(turn, -self._turn_lag), self._turn_lag)
+
+    def _update_law(self, ids: np.ndarray, twist: np.ndarray) -> None:
+        """The law's torques for simulations ``ids``, each computed as a batch of one: the
+        stacked numpy pass rounds differently with the batch's size, and a simulation of
+        the vector env must step as the single env's does."""
+        for k, i in enumerate(ids.tolist()):
+            data = self.datas[i]
+            (torques,) = self.arm.batch_torques(
+                [data],
+                self.target[i : i + 1],
+                grip_rotation(self.yaw[i])[None],
+                twist[k : k + 1],
+                self.posture[i : i + 1],
+                payload=self._held_mass,
+            )
+            data.ctrl[self.arm.motors] = torques
+
+    def _summed_touch(self, ids: np.ndarray) -> np.ndarray:
+        return (
+            np.array([sum(self.datas[i].sensordata[self._touch].tolist()) for i in ids.tolist()])
+            * FORCE_SCALE
+        )
+
+    def state(
+        self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
+    ) -> BatchState:
+        """Simulations ``ids`` now: the part's true pose and the board's push on its pins,
+        the given peak forces, and what the robot senses of both."""
+        n = len(ids)
+        pose, wrench = np.zeros((n, 4)), np.zeros((n, 4))
+        sensed_pose, sensed_wrench = np.zeros((n, 4)), np.zeros((n, 4))
+        for k, i in enumerate(ids.tolist()):
+            data = self.datas[i]
+            qpos = data.qpos[self._part : self._part + 7]
+            frame = data.site_xmat[self._site].reshape(3, 3)
+            pose[k] = qpos[0], qpos[1], math.atan2(frame[1, 0], frame[0, 0]), qpos[2]
+            force = self._pins_weight - frame @ data.sensordata[self._force : self._force + 3]
+            torque = -(frame @ data.sensordata[self._torque : self._torque + 3])
+            wrench[k] = np.array([force[0], force[1], torque[2], force[2]]) * FORCE_SCALE
+            sensed_pose[k] = nominal_pose(data, self.arm)
+            sensed_wrench[k] = wrist_wrench(data, self.arm, self._held_mass)
+        return BatchState(pose, wrench, peak_force, errors, sensed_pose, sensed_wrench)
+
+
+class PandaBatch(Capabilities):
+    """``num_envs`` Panda worlds of one socket family (see the module docstring).
+
+    Every defect kind but a plugged hole (which adds a board piece and so moves the
+    addresses the arm's law reads) can be a simulation's workpiece: it then runs on the
+    world compiled for it. Randomised physics is not drawn
+    for the arm (yet): its terms would need the arm's own.
+
+    Args:
+        socket: The nominal socket; every simulation starts with it.
+        num_envs: Number of simulations.
+        control_dt: Control period (s), as the free body's.
+        physics_version: 1 or 2: the board in a body of its own or in the world body
+            (:mod:`tolins.physics.versions`); the arm always steps on the contact step.
+        law_rate: Updates of the law per second (:data:`LAW_RATE`).
+        gains: The law's gains (:class:`~tolins.physics.arm.Gains`).
+        contact_checks: Contact-force reads per control step, as the free body's.
+    """
+
+    supports_render = True
+    supports_randomization = False
+    supports_touch_points = False
+    defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
+    batch_options = frozenset({"persistent"})
+
+    def __init__(
+        self,
+        socket: SocketSpec,
+        num_envs: int,
+        control_dt: float,
+        physics_version: int = 2,
+        law_rate: int = LAW_RATE,
+        gains: Gains | None = None,
+        contact_checks: int | None = None,
+        persistent: bool = True,
+    ) -> None:
+        self.num_envs = check_int("num_envs", num_envs, minimum=1)
+        self.version = physics_version_of(physics_version)
+        build = functools.partial(compile_panda_world, physics_version=physics_version)
+        self.model = build(socket)
+        self._compiled = SocketCache(build, socket, 2 * self.num_envs, own=self.model)
+        self._sockets = [socket] * self.num_envs
+        models = [self.model] * self.num_envs
+        datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
+        self.arm = Arm(self.model, gains)
+        self.sims = PandaSimulations(self.arm, models, datas, control_dt, law_rate, contact_checks)
+
+    def set_socket(self, index: int, socket: SocketSpec) -> None:
+        if socket is self._sockets[index]:
+            return
+        model = self._compiled.get(socket)
+        self._sockets[index] = socket
+        self.sims.models[index] = model
+        self.sims.datas[index] = mujoco.MjData(model)
+
+    def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
+        """Only the nominal physics (``None``); a draw raises ``ValueError``."""
+        if draw is not None:
+            raise ValueError("randomization is not supported with robot='panda'")
+
+    def set_grasp(self, index: int, offset: np.ndarray) -> None:
+        """Hold simulation ``index``'s part off by ``offset`` ``[dx, dy, dyaw]`` (mm, rad,
+        the grip frame) from its next reset on."""
+        self.sims.grasp[index] = offset
+
+    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+        return self.sims.reset(np.asarray(ids, dtype=np.intp), np.asarray(poses, dtype=float))
+
+    def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
+        return self.sims.step(np.asarray(ids, dtype=np.intp), velocities)
+
+    def drawing(self, index: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Simulation ``index``'s model and data (the batch's own: draw before stepping)."""
+        return self.sims.models[index], self.sims.datas[index]
+
+    def close(self) -> None:
+        """Release the simulations and the compiled models."""
+        self.sims.datas, self.sims.models = [], []
+        self._compiled.clear()
+
+
+_ONE = np.zeros(1, dtype=np.intp)
+
+
+class PandaBackend(Capabilities):
+    """The single env's Panda: a :class:`PandaBatch` of one (``model`` and ``data`` are the
+    simulation's, for drawing; :meth:`set_socket` replaces both; a plugged hole, which adds
+    a board piece, is the one defect kind it cannot take)."""
+
+    supports_render = True
+    supports_randomization = False
+    supports_touch_points = False
+    defect_kinds = PandaBatch.defect_kinds
+
+    def __init__(
+        self,
+        spec: SocketSpec,
+        control_dt: float,
+        physics_version: int = 2,
+        law_rate: int = LAW_RATE,
+        gains: Gains | None = None,
+    ) -> None:
+        self.spec = spec
+        self._batch = PandaBatch(spec, 1, control_dt, physics_version, law_rate, gains)
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        return self._batch.sims.models[0]
+
+    @property
+    def data(self) -> mujoco.MjData:
+        return self._batch.sims.datas[0]
+
+    def set_socket(self, socket: SocketSpec) -> None:
+        """Simulate ``socket`` (any workpiece, its own world) from the next reset on."""
+        self._batch.set_socket(0, socket)
+        self.spec = socket
+
+    def set_physics(self, draw: PhysicsDraw | None) -> None:
+        self._batch.set_physics(0, draw)
+
+    def set_grasp(self, offset: np.ndarray) -> None:
+        """As :meth:`PandaBatch.set_grasp`."""
+        self._batch.set_grasp(0, offset)
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        return self._batch.reset(_ONE, np.reshape(pose, (1, 4))).row(0)
+
+    def step(self, velocity: np.ndarray) -> BackendState:
+        return self._batch.step(_ONE, np.reshape(velocity, (1, 4))).row(0)

@@ -3,6 +3,7 @@
 Usage::
 
     python benchmarks/panda_validation.py [--episodes 20] [--envs Circle2x2,Circle2x8,Square]
+        [--rates 250,500,1000]
 
 For each preset and its 50 µm grade, each expert runs ``--episodes`` episodes (seeds 0 …)
 on ``tolins/{name}-v2`` (the free body on its servos) and on ``tolins/{name}Panda-v2`` (a
@@ -12,6 +13,12 @@ them); for the Panda also the largest slip of the part in the hand during an epi
 true pose against the robot's belief, less the offset the grasp settled at), the share of
 law updates with a motor at its torque limit, the closest approach of any joint to its
 limit, and the wall time per control step against the free body's (goal ≤ 2×).
+
+Then, on the 2*2, the same for the law updated at each of ``--rates`` Hz, and a press: the
+part 1 mm beside the holes, 1 mm over the board, commanded down at full speed for six
+control steps, where the free body's servos stop at the first contact and the arm's law
+presses on: per step the board's push (true), the wrist's reading, the part's true height
+and the robot's belief of it.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ import numpy as np
 
 import tolins  # noqa: F401  (registers the ids)
 from tolins.physics import arm as arm_law
+from tolins.physics.panda import LAW_RATE, PandaBackend
 from tolins.policies import EXPERTS
 
 
@@ -47,8 +55,10 @@ class LimitWatch:
         arm_law.Arm.batch_torques = self._law
 
 
-def run(env_id: str, expert: str, episodes: int) -> dict[str, float]:
+def run(env_id: str, expert: str, episodes: int, law_rate: int | None = None) -> dict[str, float]:
     env = gym.make(env_id).unwrapped
+    if law_rate is not None:
+        env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, law_rate=law_rate)
     panda = env.settings.robot == "panda"
     rows, slips, margins, steps_total, wall = [], [], [], 0, 0.0
     for seed in range(episodes):
@@ -88,10 +98,25 @@ def run(env_id: str, expert: str, episodes: int) -> dict[str, float]:
     }
 
 
+def press(env_id: str) -> list[tuple[float, float, float, float]]:
+    """Per control step of the press (see the module docstring): the board's push Fz (N),
+    the sensed Fz, the true and the believed height of the pin tips (mm)."""
+    env = gym.make(env_id, measurement_noise=0.0).unwrapped
+    env.reset(seed=0, options={"pose": [1.0, 0.0, 0.0, 1.0]})
+    rows = []
+    for _ in range(6):
+        _, _, _, _, info = env.step(np.array([0.0, 0.0, 0.0, -2.5]))
+        sensed = info.get("sensed_wrench", info["wrench"])[3]
+        belief = info.get("sensed_pose", info["pose"])[3]
+        rows.append((info["wrench"][3], sensed, info["pose"][3], belief))
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--envs", default="Circle2x2,Circle2x8,Square")
+    parser.add_argument("--rates", default="250,500,1000", help="law updates per second (Hz)")
     args = parser.parse_args()
     print(
         "| env | expert | robot | success | steps | collisions | reward | faults | "
@@ -121,6 +146,28 @@ def main() -> None:
                         f"| {r['ms_per_step'] / free['ms_per_step']:.1f} |",
                         flush=True,
                     )
+
+    print(
+        "\n| law rate (Hz) | expert | success | steps | collisions | reward | faults | "
+        "ms per control step |\n|--:|---|--:|--:|--:|--:|--:|--:|"
+    )
+    for rate in (int(r) for r in args.rates.split(",")):
+        for expert in EXPERTS:
+            r = run("tolins/Circle2x2Panda-v2", expert, args.episodes, law_rate=rate)
+            default = " (default)" if rate == LAW_RATE else ""
+            print(
+                f"| {rate}{default} | {expert} | {r['success']:.2f} | {r['steps']:.1f} "
+                f"| {r['collisions']:.2f} | {r['reward']:.2f} | {r['faults']} "
+                f"| {r['ms_per_step']:.2f} |",
+                flush=True,
+            )
+    print(
+        "\n| robot | step | board's push Fz (N) | sensed Fz (N) | tips' true z (mm) "
+        "| believed z (mm) |\n|---|--:|--:|--:|--:|--:|"
+    )
+    for robot, env_id in (("free", "tolins/Circle2x2-v2"), ("panda", "tolins/Circle2x2Panda-v2")):
+        for k, (true, sensed, z, belief) in enumerate(press(env_id), start=1):
+            print(f"| {robot} | {k} | {true:.2f} | {sensed:.2f} | {z:.3f} | {belief:.3f} |")
 
 
 if __name__ == "__main__":

@@ -122,3 +122,18 @@ def test_the_law_is_updated_on_its_period_and_the_contacts_read_on_their_chunks(
     assert sum(update for _, update, _ in plan) == 125  # 500 Hz on 1 ms steps
     assert [i for i, (_, _, read) in enumerate(plan) if read] == [24, 49, 74, 99, 124]
     assert DROPPED > 1.0  # far beyond how the grasp settles
+
+
+def test_the_dm_control_domain_steps_as_the_gym_id(env: InsertionEnv) -> None:
+    from tolins import dmc
+
+    suite = dmc.load("circle2x2_panda", "insert", task_kwargs={"random": 5, **QUIET})
+    assert isinstance(suite.physics, dmc.PandaInsertionPhysics)
+    first = suite.reset()
+    observation, _ = env.reset(seed=5)
+    np.testing.assert_array_equal(np.concatenate(list(first.observation.values())), observation)
+    for action in ([1.0, 0.0, 0.05, -2.5], [0.0, -1.0, 0.0, -2.5]):
+        step = suite.step(action)
+        observation, reward, *_ = env.step(np.array(action))
+        np.testing.assert_array_equal(np.concatenate(list(step.observation.values())), observation)
+        assert step.reward == reward

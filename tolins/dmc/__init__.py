@@ -9,7 +9,7 @@ timestep = env.step([0.0, 0.0, 0.0, -2.5])
 ```
 """
 
-from tolins.dmc.physics import InsertionPhysics
+from tolins.dmc.physics import InsertionPhysics, PandaInsertionPhysics
 from tolins.dmc.suite import (
     ALL_TASKS,
     CIRCLE,
@@ -17,6 +17,7 @@ from tolins.dmc.suite import (
     GRADE,
     PAPER,
     POLYGON,
+    ROBOT,
     SUITES,
     TASK_KWARGS,
     TASKS_BY_DOMAIN,
@@ -33,11 +34,13 @@ __all__ = [
     "GRADE",
     "PAPER",
     "POLYGON",
+    "ROBOT",
     "SUITES",
     "TASKS_BY_DOMAIN",
     "TASK_KWARGS",
     "Insert",
     "InsertionPhysics",
+    "PandaInsertionPhysics",
     "get_tasks",
     "load",
     "make_environment",

@@ -11,8 +11,12 @@ from dm_control import mujoco as dm_mujoco
 
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
+from tolins.paper import CONTROL_DT
+from tolins.physics.panda import PandaStepper, compile_panda_world
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
+from tolins.physics.registry import check_robot
+from tolins.physics.schedule import control_plan
 from tolins.physics.servo import ServoStepper
 from tolins.physics.versions import VERSIONS, PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
@@ -38,9 +42,15 @@ class InsertionPhysics(dm_mujoco.Physics):
         super()._reload_from_data(data)
         self._bind_stepper()
 
+    #: What holds the workpiece (``"free"`` here; :class:`PandaInsertionPhysics`: ``"panda"``).
+    robot = "free"
+
     def _bind_stepper(self) -> None:
         free_flight = self.version.free_flight
         self.stepper = ServoStepper(self.model.ptr, self.data.ptr, free_flight=free_flight)
+        self._bound()
+
+    def _bound(self) -> None:
         self.last_state = self.stepper.state(self.stepper.contact_force())
         self._saved: mujoco.MjData | None = None
 
@@ -63,18 +73,33 @@ class InsertionPhysics(dm_mujoco.Physics):
             raise
 
     @classmethod
-    def from_spec(cls, spec: SocketSpec, physics_version: int = 1) -> InsertionPhysics:
-        """The physics of ``spec``'s board and workpiece in a physics version."""
+    def from_spec(
+        cls, spec: SocketSpec, physics_version: int = 1, robot: str = "free"
+    ) -> InsertionPhysics:
+        """The physics of ``spec``'s board and workpiece in a physics version, ``robot``
+        holding the part (``"panda"``: a :class:`PandaInsertionPhysics`)."""
+        if check_robot(robot) != cls.robot:
+            return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot)
         version = physics_version_of(physics_version)
-        physics = cls.from_xml_string(make_mjcf(spec, board_body=not version.board_in_world))
+        physics = cls.from_model(cls.compile(spec, version))
         if version is not physics.version:
             physics.version = version
             physics._bind_stepper()
         return physics
 
+    @classmethod
+    def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
+        """The model of ``spec`` in ``version``."""
+        xml = make_mjcf(spec, board_body=not version.board_in_world)
+        return dm_mujoco.wrapper.MjModel(mujoco.MjModel.from_xml_string(xml))
+
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
-        self.reload_from_xml_string(make_mjcf(spec, board_body=not self.version.board_in_world))
+        self._reload_from_model(self.compile(spec, self.version))
+
+    def set_grasp(self, offset: np.ndarray) -> None:
+        """Hold the part off by ``offset`` from the next reset on (a robot's only)."""
+        raise ValueError(f"a grasp error needs a robot; this physics' robot={self.robot!r}")
 
     def set_physics(self, draw: PhysicsDraw | None) -> None:
         """Apply a randomised-physics ``draw`` to the model from its nominal values
@@ -102,3 +127,30 @@ class InsertionPhysics(dm_mujoco.Physics):
     def pose(self) -> np.ndarray:
         """True pose ``[x, y, theta, z]`` (mm, rad) now."""
         return self.stepper.state(0.0).pose
+
+
+class PandaInsertionPhysics(InsertionPhysics):
+    """A Franka Panda holding the workpiece (:mod:`tolins.physics.panda`): the same physics
+    whose ``step(nstep)`` is the arm's control step (:class:`PandaStepper`)."""
+
+    robot = "panda"
+    version: PhysicsVersion = VERSIONS[2]
+
+    def _bind_stepper(self) -> None:
+        nstep = control_plan(self.model.ptr, CONTROL_DT, None)[0]
+        self.stepper = PandaStepper(self.model.ptr, self.data.ptr, nstep * self.timestep())
+        self._bound()
+
+    @classmethod
+    def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
+        return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version.number))
+
+    def set_grasp(self, offset: np.ndarray) -> None:
+        self.stepper.set_grasp(offset)
+
+
+#: The physics class of each robot.
+ROBOT_PHYSICS: dict[str, type[InsertionPhysics]] = {
+    "free": InsertionPhysics,
+    "panda": PandaInsertionPhysics,
+}

@@ -10,7 +10,7 @@ from dm_control.utils import containers
 
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
-from tolins.envs.tasks import PRESETS, Task
+from tolins.envs.tasks import PRESETS, ROBOT_TASKS, Task
 from tolins.paper import CONTROL_DT
 
 TASK_NAME = "insert"
@@ -37,10 +37,14 @@ def make_environment(
         raise ValueError(f"task_kwargs {unknown} are unknown; allowed: {list(TASK_KWARGS)}")
     if task.defect_sigma is not None:
         task_kwargs.setdefault("defect_sigma", task.defect_sigma)
+    if task.robot != "free":
+        task_kwargs.setdefault("robot", task.robot)
+        task_kwargs.setdefault("physics_version", max(task.physics_versions))
     environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
     insert = Insert(task.socket, control_dt=environment_kwargs["control_timestep"], **task_kwargs)
     environment_kwargs["control_timestep"] = insert.settings.control_dt
-    physics = InsertionPhysics.from_spec(task.socket, insert.settings.physics_version)
+    settings = insert.settings
+    physics = InsertionPhysics.from_spec(task.socket, settings.physics_version, settings.robot)
     return control.Environment(physics, insert, **environment_kwargs)
 
 
@@ -51,13 +55,17 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
     def insert(environment_kwargs: dict[str, Any] | None = None, **task_kwargs: Any):
         return make_environment(task, task_kwargs, environment_kwargs)
 
-    insert.__doc__ = f"Insert the {task.domain} workpiece (gym id {task.gym_id})."
+    gym_id = task.gym_id_of(max(task.physics_versions)) if task.robot != "free" else task.gym_id
+    insert.__doc__ = f"Insert the {task.domain} workpiece (gym id {gym_id})."
     suite.add(*task.tags)(insert)
     return suite
 
 
-#: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``).
-SUITES: dict[str, containers.TaggedTasks] = {t.domain: _domain_suite(t) for t in PRESETS}
+#: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``):
+#: the presets', then the robot tasks' (``circle2x2_panda``, …, on ``-v2`` physics).
+SUITES: dict[str, containers.TaggedTasks] = {
+    t.domain: _domain_suite(t) for t in PRESETS + ROBOT_TASKS
+}
 
 
 def get_tasks(tag: str | None = None) -> tuple[tuple[str, str], ...]:
@@ -75,6 +83,7 @@ CIRCLE = get_tasks("circle")
 POLYGON = get_tasks("polygon")
 GRADE = get_tasks("grade")
 DEFECTIVE = get_tasks("defective")
+ROBOT = get_tasks("robot")
 #: Domain -> its task names.
 TASKS_BY_DOMAIN = {domain: tuple(suite) for domain, suite in SUITES.items()}
 

@@ -90,7 +90,9 @@ class Insert(control.Task):
     ``control_dt`` is the environment's ``control_timestep`` (s), validated by the settings
     (:func:`tolins.dmc.make_environment` passes it). ``physics_version`` (1, the default,
     or 2: :mod:`tolins.physics.versions`) is the gym ids' ``-v1`` or ``-v2``; the suite
-    builds its physics in that version.
+    builds its physics in that version. ``robot`` and ``grasp_error`` are the gym env's
+    (``"panda"``: a Franka Panda holds the part,
+    :class:`~tolins.dmc.physics.PandaInsertionPhysics`).
     """
 
     def __init__(
@@ -111,6 +113,8 @@ class Insert(control.Task):
         defects: Any = None,
         control_dt: float = CONTROL_DT,
         physics_version: int = 1,
+        robot: str = "free",
+        grasp_error: Any = None,
         random: Any = None,
     ) -> None:
         self.settings = TaskSettings(
@@ -127,6 +131,8 @@ class Insert(control.Task):
             randomization=randomization,
             defects=defects,
             physics_version=physics_version,
+            robot=robot,
+            grasp_error=grasp_error,
         )
         self.episode = EpisodeState(self.settings, goal)
         self.pose = check_fixed_pose(self.settings, pose)
@@ -170,6 +176,12 @@ class Insert(control.Task):
                 f"physics_version={self.settings.physics_version}; allowed: "
                 "InsertionPhysics.from_spec(socket, physics_version) of the task's version"
             )
+        if physics.robot != self.settings.robot:
+            raise ValueError(
+                f"the physics' robot is {physics.robot!r} but the task's "
+                f"robot={self.settings.robot!r}; allowed: InsertionPhysics.from_spec(socket, "
+                "physics_version, robot) of the task's robot"
+            )
         random_state = self.random.bit_generator.state
         try:
             plan = self.episode.plan(self.random, pose=self.pose)
@@ -179,6 +191,7 @@ class Insert(control.Task):
         if plan.socket is not self.socket:
             physics.reload_from_spec(plan.socket)
         plan.apply_physics(physics.set_physics)
+        plan.apply_grasp(physics.set_grasp)
         self.last_score, self.error = NO_SCORE, None
         self.episode.start(plan, physics.set_pose(plan.pose), self.random)
 

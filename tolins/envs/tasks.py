@@ -136,12 +136,13 @@ PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
 
 def _on_panda(task: Task) -> Task:
     """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), on the
-    newest physics only."""
+    newest physics only, tagged ``robot`` (not ``paper`` or ``grade``: those suites stay the
+    free body's)."""
     return Task(
         name=f"{task.name}Panda",
         domain=f"{task.domain}_panda",
         socket=task.socket,
-        tags=(*task.tags, "robot"),
+        tags=("robot", *(t for t in task.tags if t not in ("paper", "grade"))),
         defect_sigma=task.defect_sigma,
         robot="panda",
         versions=(LATEST,),

@@ -53,6 +53,8 @@ from tolins.physics.schedule import contact_chunks, control_plan
 from tolins.physics.servo import simulation_fault
 from tolins.physics.versions import physics_version as physics_version_of
 
+#: A batch of one's simulation ids.
+_ONE = np.zeros(1, dtype=np.intp)
 #: How often the law is updated (Hz); the real Panda's torque interface runs at 1 kHz.
 LAW_RATE = 500
 #: The closing force of each finger (N).
@@ -162,7 +164,7 @@ class PandaSimulations:
                 mujoco.mj_step(model, data, nstep=min(self.every, settle - start))
             data.eq_active[self._hold] = False
             mujoco.mj_forward(model, data)
-        return self.state(ids, self._summed_touch(ids), None)
+        return self.state(ids, self.summed_touch(ids), None)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         """Track ``velocities[k]`` ``[ux, uy, uθ, uz]`` with simulation ``ids[k]`` for one
@@ -183,7 +185,7 @@ class PandaSimulations:
             for i in ids.tolist():
                 mujoco.mj_step(self.models[i], self.datas[i], nstep=steps)
             if read:
-                peak = np.maximum(peak, self._summed_touch(ids))
+                peak = np.maximum(peak, self.summed_touch(ids))
         state = self.state(ids, peak, None)
         faults = []
         for k, (count, i) in enumerate(zip(before, ids.tolist(), strict=True)):
@@ -225,7 +227,8 @@ class PandaSimulations:
             )
             data.ctrl[self.arm.motors] = torques
 
-    def _summed_touch(self, ids: np.ndarray) -> np.ndarray:
+    def summed_touch(self, ids: np.ndarray) -> np.ndarray:
+        """Summed normal contact force on the pins of each of ``ids`` now (N)."""
         return (
             np.array([sum(self.datas[i].sensordata[self._touch].tolist()) for i in ids.tolist()])
             * FORCE_SCALE
@@ -333,9 +336,6 @@ class PandaBatch(Capabilities):
         self._compiled.clear()
 
 
-_ONE = np.zeros(1, dtype=np.intp)
-
-
 class PandaBackend(Capabilities):
     """The single env's Panda: a :class:`PandaBatch` of one (``model`` and ``data`` are the
     simulation's, for drawing; :meth:`set_socket` replaces both; a plugged hole, which adds
@@ -382,3 +382,50 @@ class PandaBackend(Capabilities):
 
     def step(self, velocity: np.ndarray) -> BackendState:
         return self._batch.step(_ONE, np.reshape(velocity, (1, 4))).row(0)
+
+
+class PandaStepper:
+    """One Panda world's control step on a model and data it does not own (dm_control's
+    physics): what :class:`~tolins.physics.servo.ServoStepper` is to the free body.
+
+    Args:
+        model: A model of :func:`compile_panda_world`.
+        data: Its data; read and written in place.
+        control_dt: The control period (s) its steps take (``advance(nstep)`` of another
+            number of physics steps sets another).
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, control_dt: float) -> None:
+        self.model, self.data = model, data
+        self.arm = Arm(model)
+        self.velocity = np.zeros(4)
+        self._sims = PandaSimulations(self.arm, [model], [data], control_dt)
+
+    def set_grasp(self, offset: np.ndarray) -> None:
+        """As :meth:`PandaBatch.set_grasp`."""
+        self._sims.grasp[0] = offset
+
+    def reset(self, pose: np.ndarray) -> BackendState:
+        """Grasp the part at ``pose`` ``[x, y, theta, z]`` (as :meth:`PandaSimulations.reset`)."""
+        return self._sims.reset(_ONE, np.reshape(np.asarray(pose, dtype=float), (1, 4))).row(0)
+
+    def command(self, velocity: np.ndarray) -> None:
+        """Set the velocity ``[ux, uy, utheta, uz]`` (mm/s, rad/s) of the next steps."""
+        self.velocity = np.asarray(velocity, dtype=float).copy()
+
+    def advance(self, nstep: int) -> BackendState:
+        """Track the commanded velocity for ``nstep`` physics steps (one control step)."""
+        if nstep != self._sims.nstep:
+            grasp = self._sims.grasp.copy()
+            control_dt = nstep * self.model.opt.timestep
+            self._sims = PandaSimulations(self.arm, [self.model], [self.data], control_dt)
+            self._sims.grasp[:] = grasp
+        return self._sims.step(_ONE, self.velocity[None]).row(0)
+
+    def state(self, peak_force: float) -> BackendState:
+        """The part now, with ``peak_force`` (as :meth:`PandaSimulations.state`)."""
+        return self._sims.state(_ONE, np.array([peak_force]), None).row(0)
+
+    def contact_force(self) -> float:
+        """Summed normal contact force on all pins now (N)."""
+        return float(self._sims.summed_touch(_ONE)[0])

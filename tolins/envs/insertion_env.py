@@ -135,7 +135,19 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     (true ``[x, y, theta, z]``), ``wrench`` (true ``[Fx, Fy, q_theta, Fz]``),
     ``peak_force``, ``step``, ``goal``, the reward terms ``reward_success``,
     ``reward_collision``, ``reward_approach``, ``reward_height``, ``reward_alignment``,
-    ``reward_depth``, ``reward_offset``, and ``error`` after a fault.
+    ``reward_depth``, ``reward_offset``, and ``error`` after a fault. With a robot, also
+    ``sensed_pose`` and ``sensed_wrench`` (what the observation measures) and, at a reset
+    with ``grasp_error``, ``grasp_error`` (the drawn offset in the hand).
+
+    **Robot** (``robot``): ``"free"`` (the default), the paper's ideal servos on a
+    free-floating workpiece; ``"panda"`` (``pip install 'tolins[robot]'``; the ids
+    ``tolins/{name}Panda-v2``), a Franka Panda holding it by friction under a task-space
+    impedance law that tracks the same actions (:mod:`tolins.physics.panda`, docs/robot.md).
+    The observation then measures what the robot senses: the pose from the arm's forward
+    kinematics and the nominal grasp, the wrench from its wrist sensor less the weight
+    of the hand and the part; ``info["pose"]`` and ``info["wrench"]`` stay the truth, and
+    success is judged on the true pose. ``grasp_error`` (std ``[x, y, yaw]``) puts the part
+    off in the hand every episode.
 
     **Closing**: ``close()`` releases the simulation and the renderer; a later ``reset``,
     ``step`` or ``render`` raises ``gymnasium.error.ClosedEnvironmentError`` (closing twice

@@ -58,18 +58,19 @@ READY = np.array([-1.4786, 1.0651, 1.3737, -2.4438, -1.3635, 0.5028, 0.8614])
 class Gains:
     """The law's gains: ``stiffness`` (s⁻², per task axis: x, y, z, then rotations), the
     damping critical for a unit mass (``2 √Kp``), the posture's ``null`` (s⁻²), and the
-    largest spring force (mN, along each of x, y and z) the law pushes with: 20 N, half
-    what the fingers' friction holds (2 × 20 N closing, μ = 1), four times the free body's
-    servo limit (:data:`~tolins.mjcf.model.FORCE_LIMIT`: at 5 N the arm cannot overcome
-    its own pins' friction on the board while it presses). Its torques are not limited
-    but by the motors: the wrist's inertia needs far more than the free body's yaw servo.
+    largest spring force (mN) the law pushes with along x, y and z: down, the free body's
+    servo limit (:data:`~tolins.mjcf.model.FORCE_LIMIT`, 5 N); sideways four times that,
+    more than the friction of pins pressed on the board with 5 N (μ = 1), so that the arm
+    can slide into a hole while it presses (at 5 N sideways it could not). Its torques are
+    limited by the motors only: the wrist's inertia needs far more than the free body's
+    yaw servo gives.
 
-    ``benchmarks/panda_validation.py`` measured the defaults against 2,000 s⁻² and 5 N.
+    ``benchmarks/panda_validation.py`` measured the defaults against other gains.
     """
 
     stiffness: tuple[float, ...] = (20000.0,) * 6
     null: float = 20.0
-    force_limit: float = 4 * FORCE_LIMIT
+    force_limit: tuple[float, float, float] = (4 * FORCE_LIMIT, 4 * FORCE_LIMIT, FORCE_LIMIT)
 
     @property
     def damping(self) -> np.ndarray:
@@ -189,7 +190,7 @@ class Arm:
         # The position error's pull along each axis within the limit over that axis's
         # task inertia; Λ then maps the clipped pull as a whole, so its cross terms still
         # keep the hand's orientation.
-        most = gains.force_limit / np.diagonal(task, axis1=1, axis2=2)[:, :3]
+        most = np.asarray(gains.force_limit) / np.diagonal(task, axis1=1, axis2=2)[:, :3]
         pull[:, :3] = np.clip(pull[:, :3], -most, most)
         spring = np.einsum("nij,nj->ni", task, pull)
         damper = np.einsum("nij,nj->ni", task, gains.damping * (twist - velocity))

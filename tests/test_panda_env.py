@@ -92,7 +92,6 @@ def test_a_grasp_error_is_drawn_per_episode_off_by_default_and_ground_truth_in_i
         ({"robot": "panda", "backend": "kinematic"}, "backend='kinematic' with robot='panda'"),
         ({"grasp_error": 0.1}, "grasp_error needs a robot"),
         ({"robot": "panda", "grasp_error": [2.0, 0, 0]}, "grasp_error=.* is out of range"),
-        ({"robot": "panda", "randomization": "default"}, "randomization is not supported"),
         ({"robot": "panda", "defects": ("blocked", None)}, "not supported on .*robot='panda'"),
     ],
 )
@@ -124,11 +123,14 @@ def test_the_law_is_updated_on_its_period_and_the_contacts_read_on_their_chunks(
     assert DROPPED > 1.0  # far beyond how the grasp settles
 
 
-def test_the_dm_control_domain_steps_as_the_gym_id(env: InsertionEnv) -> None:
+@pytest.mark.parametrize("randomization", [None, "default"])
+def test_the_dm_control_domain_steps_as_the_gym_id(randomization: str | None) -> None:
     from tolins import dmc
 
-    suite = dmc.load("circle2x2_panda", "insert", task_kwargs={"random": 5, **QUIET})
+    kwargs = {"randomization": randomization, **QUIET}
+    suite = dmc.load("circle2x2_panda", "insert", task_kwargs={"random": 5, **kwargs})
     assert isinstance(suite.physics, dmc.PandaInsertionPhysics)
+    env = gym.make(PANDA, **kwargs).unwrapped
     first = suite.reset()
     observation, _ = env.reset(seed=5)
     np.testing.assert_array_equal(np.concatenate(list(first.observation.values())), observation)
@@ -137,3 +139,26 @@ def test_the_dm_control_domain_steps_as_the_gym_id(env: InsertionEnv) -> None:
         observation, reward, *_ = env.step(np.array(action))
         np.testing.assert_array_equal(np.concatenate(list(step.observation.values())), observation)
         assert step.reward == reward
+
+
+def test_randomised_physics_scales_the_laws_gains_and_the_worlds_contacts() -> None:
+    vector = tolins.make_vec(PANDA, 2, randomization="default", **QUIET)
+    _, infos = vector.reset(seed=[1, 2])
+    batch = vector.unwrapped.physics
+    nominal = batch.arm.gains
+    for i in range(2):
+        drawn = {k: infos["physics"][k][i] for k in ("friction", "servo_gain", "force_limit")}
+        gains, model = batch.sims.gains[i], batch.sims.models[i]
+        np.testing.assert_allclose(
+            gains.stiffness, np.asarray(nominal.stiffness) * drawn["servo_gain"]
+        )
+        np.testing.assert_allclose(
+            gains.force_limit, np.asarray(nominal.force_limit) * drawn["force_limit"]
+        )
+        np.testing.assert_allclose(
+            model.geom_friction[:, 0], batch.model.geom_friction[:, 0] * drawn["friction"]
+        )
+        # The motors keep the Franka's torque limits and unit gains.
+        np.testing.assert_array_equal(model.actuator_ctrlrange, batch.model.actuator_ctrlrange)
+        np.testing.assert_array_equal(model.actuator_gainprm, batch.model.actuator_gainprm)
+    vector.close()

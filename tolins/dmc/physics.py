@@ -12,7 +12,7 @@ from dm_control import mujoco as dm_mujoco
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
 from tolins.paper import CONTROL_DT
-from tolins.physics.panda import PandaStepper, compile_panda_world
+from tolins.physics.panda import PandaStepper, compile_panda_world, split_draw
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.registry import check_robot
@@ -147,6 +147,17 @@ class PandaInsertionPhysics(InsertionPhysics):
 
     def set_grasp(self, offset: np.ndarray) -> None:
         self.stepper.set_grasp(offset)
+
+    def set_physics(self, draw: PhysicsDraw | None) -> None:
+        """A randomised-physics ``draw``: its contact terms on the model, its servo terms on
+        the law (:func:`~tolins.physics.panda.split_draw`)."""
+        if draw is None:
+            super().set_physics(None)
+            self.stepper.set_gains(None)
+            return
+        contact, gains = split_draw(draw, self.stepper.arm.gains)
+        super().set_physics(contact)
+        self.stepper.set_gains(gains)
 
 
 #: The physics class of each robot.

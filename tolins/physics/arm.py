@@ -72,6 +72,16 @@ class Gains:
     null: float = 20.0
     force_limit: tuple[float, float, float] = (4 * FORCE_LIMIT, 4 * FORCE_LIMIT, FORCE_LIMIT)
 
+    def scaled(self, stiffness: float | None, force_limit: float | None) -> Gains:
+        """These gains with the stiffness and the force limit times the given factors
+        (``None``: unchanged), the damping still critical: a randomised draw's
+        ``servo_gain`` and ``force_limit``."""
+        return Gains(
+            tuple(np.asarray(self.stiffness) * (stiffness or 1.0)),
+            self.null,
+            tuple(np.asarray(self.force_limit) * (force_limit or 1.0)),
+        )
+
     @property
     def damping(self) -> np.ndarray:
         return 2.0 * np.sqrt(np.asarray(self.stiffness))
@@ -166,12 +176,13 @@ class Arm:
         twist: np.ndarray,
         posture: np.ndarray,
         payload: float = 0.0,
+        gains: Gains | None = None,
     ) -> np.ndarray:
         """:meth:`torques` of every simulation in ``datas`` (of this arm's model) at once,
         ``(n, 7)``: the Jacobians, mass matrices and errors read per simulation, the law's
         algebra in one stacked numpy pass (``pos`` ``(n, 3)``, ``rot`` ``(n, 3, 3)``,
         ``twist`` ``(n, 6)``, ``posture`` ``(n, 7)``); ``payload``: the mass (kg) held at
-        the grip site, whose weight the law holds up."""
+        the grip site, whose weight the law holds up; ``gains``: other than the arm's."""
         jac = np.stack([self.jacobian(data) for data in datas])
         mass = np.stack([self._arm_mass(data) for data in datas])
         error = np.stack(
@@ -184,8 +195,8 @@ class Arm:
         jac_t = jac.transpose(0, 2, 1)
         task = np.linalg.inv(jac @ inverse @ jac_t)
         velocity = np.einsum("nij,nj->ni", jac, qdot)
-        stiffness = np.asarray(self.gains.stiffness)
-        gains = self.gains
+        gains = gains or self.gains
+        stiffness = np.asarray(gains.stiffness)
         pull = stiffness * error
         # The position error's pull along each axis within the limit over that axis's
         # task inertia; Λ then maps the clipped pull as a whole, so its cross terms still
@@ -197,7 +208,7 @@ class Arm:
         held = np.r_[-payload * GRAVITY, np.zeros(3)]
         consistent = inverse @ jac_t @ task
         null = np.eye(len(self.dof)) - jac_t @ consistent.transpose(0, 2, 1)
-        rate = self.gains.null
+        rate = gains.null
         hold = np.einsum("nij,nj->ni", mass, rate * (posture - q) - 2.0 * np.sqrt(rate) * qdot)
         tau = (
             np.einsum("nij,nj->ni", jac_t, spring + damper + held)

@@ -29,6 +29,7 @@ the hand and the part removed (``sensed_wrench``); the observation measures the 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import itertools
@@ -48,7 +49,7 @@ from tolins.paper import A_MAX
 from tolins.physics.arm import Arm, Gains, grip_rotation, nominal_pose, place_grasp, wrist_wrench
 from tolins.physics.compiled import SocketCache
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
-from tolins.physics.randomization import PhysicsDraw
+from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import contact_chunks, control_plan
 from tolins.physics.servo import simulation_fault
 from tolins.physics.versions import physics_version as physics_version_of
@@ -101,6 +102,14 @@ def update_plan(nstep: int, checks: int, every: int) -> tuple[tuple[int, bool, b
     )
 
 
+def split_draw(draw: PhysicsDraw, gains: Gains) -> tuple[PhysicsDraw, Gains]:
+    """A randomised draw for a Panda world: its contact terms (friction, stiffness: for the
+    model) and ``gains`` scaled by its servo terms (``servo_gain`` the stiffness, the
+    damping staying critical; ``force_limit`` the spring force limit)."""
+    contact = dataclasses.replace(draw, servo_gain=None, force_limit=None)
+    return contact, gains.scaled(draw.servo_gain, draw.force_limit)
+
+
 class PandaSimulations:
     """Panda worlds of one socket family, each a model and a data it does not own, reset
     and stepped together.
@@ -134,6 +143,8 @@ class PandaSimulations:
         self.yaw = np.zeros(n)
         self.posture = np.zeros((n, len(arm.dof)))
         self.grasp = np.zeros((n, 3))
+        #: Each simulation's gains (a randomised draw scales them).
+        self.gains = [arm.gains] * n
         touch = touch_addresses(model)
         self._touch = slice(touch[0], touch[-1] + 1)
         self._force = int(model.sensor(FORCE_SENSOR).adr[0])
@@ -224,6 +235,7 @@ class PandaSimulations:
                 twist[k : k + 1],
                 self.posture[i : i + 1],
                 payload=self._held_mass,
+                gains=self.gains[i],
             )
             data.ctrl[self.arm.motors] = torques
 
@@ -275,7 +287,7 @@ class PandaBatch(Capabilities):
     """
 
     supports_render = True
-    supports_randomization = False
+    supports_randomization = True
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
     batch_options = frozenset({"persistent"})
@@ -311,9 +323,19 @@ class PandaBatch(Capabilities):
         self.sims.datas[index] = mujoco.MjData(model)
 
     def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
-        """Only the nominal physics (``None``); a draw raises ``ValueError``."""
-        if draw is not None:
-            raise ValueError("randomization is not supported with robot='panda'")
+        """Run simulation ``index`` with a randomised-physics ``draw`` (``None``: nominal):
+        friction and contact stiffness on a copy of its world's model, as the free body's;
+        the servo terms on the law: ``servo_gain`` scales its stiffness (its damping stays
+        critical), ``force_limit`` its spring force limit."""
+        base = self._compiled.get(self._sockets[index])
+        sims = self.sims
+        if draw is None or not draw.changes_model:
+            sims.models[index], sims.gains[index] = base, self.arm.gains
+            return
+        contact, sims.gains[index] = split_draw(draw, self.arm.gains)
+        model = copy.copy(base)
+        apply_draw(model, nominal_fields(base), contact)
+        sims.models[index] = model
 
     def set_grasp(self, index: int, offset: np.ndarray) -> None:
         """Hold simulation ``index``'s part off by ``offset`` ``[dx, dy, dyaw]`` (mm, rad,
@@ -342,7 +364,7 @@ class PandaBackend(Capabilities):
     a board piece, is the one defect kind it cannot take)."""
 
     supports_render = True
-    supports_randomization = False
+    supports_randomization = True
     supports_touch_points = False
     defect_kinds = PandaBatch.defect_kinds
 
@@ -405,6 +427,10 @@ class PandaStepper:
         """As :meth:`PandaBatch.set_grasp`."""
         self._sims.grasp[0] = offset
 
+    def set_gains(self, gains: Gains | None) -> None:
+        """The law's gains from the next step on (``None``: the arm's own)."""
+        self._sims.gains[0] = gains or self.arm.gains
+
     def reset(self, pose: np.ndarray) -> BackendState:
         """Grasp the part at ``pose`` ``[x, y, theta, z]`` (as :meth:`PandaSimulations.reset`)."""
         return self._sims.reset(_ONE, np.reshape(np.asarray(pose, dtype=float), (1, 4))).row(0)
@@ -416,10 +442,10 @@ class PandaStepper:
     def advance(self, nstep: int) -> BackendState:
         """Track the commanded velocity for ``nstep`` physics steps (one control step)."""
         if nstep != self._sims.nstep:
-            grasp = self._sims.grasp.copy()
+            grasp, gains = self._sims.grasp.copy(), self._sims.gains
             control_dt = nstep * self.model.opt.timestep
             self._sims = PandaSimulations(self.arm, [self.model], [self.data], control_dt)
-            self._sims.grasp[:] = grasp
+            self._sims.grasp[:], self._sims.gains = grasp, gains
         return self._sims.step(_ONE, self.velocity[None]).row(0)
 
     def state(self, peak_force: float) -> BackendState:

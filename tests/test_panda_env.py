@@ -6,12 +6,15 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from rrd_tables import read_tables
 
 import tolins
 from tolins.envs import InsertionEnv
 from tolins.envs.tasks import ROBOT_TASKS, TASKS, env_ids, task_of
 from tolins.physics.panda import DROPPED, update_plan
 from tolins.policies import SafeExpert
+from tolins.record.arm import arm_drawing
+from tolins.record.recorder import RerunRecorder
 
 PANDA = "tolins/Circle2x2Panda-v2"
 QUIET = {"measurement_noise": 0.0}
@@ -162,3 +165,32 @@ def test_randomised_physics_scales_the_laws_gains_and_the_worlds_contacts() -> N
         np.testing.assert_array_equal(model.actuator_ctrlrange, batch.model.actuator_ctrlrange)
         np.testing.assert_array_equal(model.actuator_gainprm, batch.model.actuator_gainprm)
     vector.close()
+
+
+def test_a_recording_draws_the_arm_its_link_poses_and_the_wrist_force(tmp_path) -> None:
+    env = gym.make(PANDA, horizon=3)
+    recorder = RerunRecorder(env, tmp_path / "panda.rrd", policy_name="down")
+    _, info = recorder.reset(seed=0)
+    sensed = [info["sensed_wrench"]]
+    for _ in range(3):
+        *_, info = recorder.step(np.array([0.0, 0.0, 0.0, -2.5]))
+        sensed.append(info["sensed_wrench"])
+    base = env.unwrapped
+    drawing = arm_drawing(base.backend.model)
+    last = drawing.poses(base.backend.data)
+    recorder.close()
+    tables = read_tables(tmp_path / "panda.rrd")
+    root = "/world/episode_000/arm"
+    assert len(drawing.links) == 11 and "panda0_hand" in drawing.links
+    for j, link in enumerate(drawing.links):
+        rows = tables[f"{root}/{link}#temporal"]
+        assert rows["step"] == [0, 1, 2, 3]
+        np.testing.assert_allclose(rows["Transform3D:translation"][-1][0], last[j, :3])
+        np.testing.assert_allclose(rows["Transform3D:quaternion"][-1][0], last[j, 3:])
+    meshes = [k for k in tables if k.startswith(root) and k.endswith("#static")]
+    assert len(meshes) == len(drawing.pieces)
+    vertices = sum(len(p.vertices) for p in drawing.pieces)
+    assert 500 < vertices < 5000  # the coarse meshes, not the 70,000-vertex visual ones
+    series = tables["/sensed_wrench/episode_000#temporal"]["Scalars:scalars"]
+    np.testing.assert_allclose(np.array(series), np.array(sensed))
+    assert "/world/episode_000/wrist_force#temporal" in tables

@@ -12,14 +12,17 @@ import numpy as np
 import rerun as rr
 
 from tolins.geometry.specs import SocketSpec
+from tolins.record.arm import ArmDrawing, log_arm
 from tolins.record.layout import (
     FORCE_SCALE,
     SIM_TIME,
     STEP,
+    arm_path,
     force_path,
     plugs_path,
     series_path,
     workpiece_path,
+    wrist_force_path,
 )
 from tolins.record.metadata import spec_to_dict
 from tolins.record.scene import log_workpiece
@@ -52,6 +55,12 @@ class EpisodeBuffer:
     successes: list[bool] = field(default_factory=list)
     peak_forces: list[float] = field(default_factory=list)
     events: list[tuple[int, str, str]] = field(default_factory=list)
+    #: A robot's drawing, its links' poses ``(links, 7)`` and its flange's position per
+    #: row (:meth:`add_arm`), and the wrist sensor's wrench per row (from ``info``).
+    arm: ArmDrawing | None = None
+    arm_poses: list[np.ndarray] = field(default_factory=list)
+    flange_positions: list[np.ndarray] = field(default_factory=list)
+    sensed_wrenches: list[np.ndarray] = field(default_factory=list)
 
     def on_reset(self, observation: np.ndarray, info: Mapping[str, Any]) -> None:
         """Row 0: the state after ``reset``."""
@@ -98,10 +107,17 @@ class EpisodeBuffer:
     def seed(self) -> int | None:
         return self.metadata.get("seed")
 
+    def add_arm(self, data: Any) -> None:
+        """The robot's links and flange in ``data`` (a ``MjData``) for the row just added."""
+        self.arm_poses.append(self.arm.poses(data))
+        self.flange_positions.append(self.arm.flange_position(data))
+
     def _add_state(self, info: Mapping[str, Any]) -> None:
         self.steps.append(int(info["step"]))
         self.poses.append(np.array(info["pose"], dtype=float))
         self.wrenches.append(np.array(info["wrench"], dtype=float))
+        if "sensed_wrench" in info:
+            self.sensed_wrenches.append(np.array(info["sensed_wrench"], dtype=float))
 
 
 def _indexes(steps: np.ndarray, control_dt: float) -> list[rr.TimeColumn]:
@@ -150,6 +166,8 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
             vectors=wrenches[:, [0, 1, 3]] * FORCE_SCALE,
         ),
     )
+    if episode.arm is not None and episode.arm_poses:
+        _send_arm(stream, episode, rows)
     for name, values in (("pose", poses), ("wrench", wrenches)):
         stream.send_columns(
             series_path(name, k),
@@ -176,3 +194,33 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
         indexes=_indexes(np.array(ev_steps, dtype=np.int64), episode.control_dt),
         columns=rr.TextLog.columns(text=list(texts), level=list(levels)),
     )
+
+
+def _send_arm(stream: rr.RecordingStream, episode: EpisodeBuffer, rows: list) -> None:
+    """The robot of ``episode``: its meshes, its links' poses and the wrist's force (an
+    arrow at the flange and the series ``sensed_wrench``) as columns."""
+    k, drawing = episode.index, episode.arm
+    root = arm_path(k)
+    log_arm(stream, root, drawing)
+    poses = np.stack(episode.arm_poses)  # (rows, links, 7)
+    for j, link in enumerate(drawing.links):
+        stream.send_columns(
+            f"{root}/{link}",
+            indexes=rows,
+            columns=rr.Transform3D.columns(translation=poses[:, j, :3], quaternion=poses[:, j, 3:]),
+        )
+    if len(episode.sensed_wrenches) == len(poses):
+        sensed = np.array(episode.sensed_wrenches)
+        stream.send_columns(
+            wrist_force_path(k),
+            indexes=rows,
+            columns=rr.Arrows3D.columns(
+                origins=np.array(episode.flange_positions),
+                vectors=sensed[:, [0, 1, 3]] * FORCE_SCALE,
+            ),
+        )
+        stream.send_columns(
+            series_path("sensed_wrench", k),
+            indexes=rows,
+            columns=rr.Scalars.columns(scalars=sensed.ravel()).partition(np.full(len(sensed), 4)),
+        )

@@ -60,19 +60,32 @@ def force_path(index: int) -> str:
     return f"{WORLD}/{episode_name(index)}/force"
 
 
+def arm_path(index: int) -> str:
+    """The robot's links of episode ``index`` (``arm/{link}``), when a robot holds the part."""
+    return f"{WORLD}/{episode_name(index)}/arm"
+
+
+def wrist_force_path(index: int) -> str:
+    """The wrist sensor's force, drawn at the flange, when a robot holds the part."""
+    return f"{WORLD}/{episode_name(index)}/wrist_force"
+
+
 def series_path(quantity: str, index: int) -> str:
     """``/{quantity}/episode_{index:03d}`` for pose, wrench, reward, collision, success,
     events and metadata."""
     return f"/{quantity}/{episode_name(index)}"
 
 
-def default_blueprint(extent: float | None = None, *, follow: bool = False) -> rrb.Blueprint:
+def default_blueprint(
+    extent: float | None = None, *, follow: bool = False, robot: bool = False
+) -> rrb.Blueprint:
     """The 3-D scene beside the plots and the event log, on the ``step`` timeline.
 
     ``extent`` (mm), the board's half-size, places the camera in front of and above the
     socket, looking down at it (as the MJCF's ``overview`` camera); ``None`` lets the
     viewer choose. ``follow``: the time panel follows the latest data (the viewer opens
-    at the last step) instead of playing from step 0.
+    at the last step) instead of playing from step 0. ``robot``: a second 3-D view under
+    the socket's shows the whole arm holding the part.
     """
     plots = rrb.Vertical(
         *(
@@ -101,6 +114,18 @@ def default_blueprint(extent: float | None = None, *, follow: bool = False) -> r
         defaults=[rr.Arrows3D.from_fields(colors=FORCE_COLOR)],
         eye_controls=eye,
     )
+    if robot:
+        arm = rrb.Spatial3DView(
+            origin=WORLD,
+            name="robot (mm)",
+            defaults=[rr.Arrows3D.from_fields(colors=FORCE_COLOR)],
+            eye_controls=rrb.EyeControls3D(
+                position=(120.0, -620.0, 330.0),
+                look_target=(-220.0, 0.0, 130.0),
+                eye_up=(0.0, 0.0, 1.0),
+            ),
+        )
+        scene = rrb.Vertical(scene, arm)
     return rrb.Blueprint(
         rrb.Horizontal(scene, plots, column_shares=[3, 2]),
         rrb.TimePanel(timeline=STEP, play_state="following" if follow else None),

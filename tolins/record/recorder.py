@@ -15,6 +15,7 @@ import rerun.blueprint as rrb
 
 from tolins.envs.insertion_env import InsertionEnv
 from tolins.mjcf.model import scene_extent
+from tolins.record.arm import ArmDrawing, arm_drawing
 from tolins.record.episode import EpisodeBuffer, send_episode
 from tolins.record.layout import default_blueprint
 from tolins.record.metadata import spec_to_dict
@@ -77,7 +78,8 @@ class RerunRecorder(gym.Wrapper):
     """Log every episode of an insertion env to rerun.
 
     Per control step it only buffers ``info`` (pose, wrench, collision, success) and the
-    reward; at the episode's end it sends each quantity as one column (see
+    reward (and, when a robot holds the part, its links' poses and the wrist's wrench:
+    :mod:`tolins.record.arm`); at the episode's end it sends each quantity as one column (see
     :mod:`tolins.record.layout` for the entity paths) from a worker thread, which runs
     while the next episode's MuJoCo steps release the GIL. The board is logged once, at
     the first reset. Call :meth:`close` (or :meth:`finish`) to complete the file; errors
@@ -108,9 +110,11 @@ class RerunRecorder(gym.Wrapper):
             self._file, self.stream = None, target
         else:
             extent = scene_extent(env.unwrapped.nominal_socket)
-            self._file = RrdFile(target, default_blueprint(extent))
+            robot = env.unwrapped.settings.robot != "free"
+            self._file = RrdFile(target, default_blueprint(extent, robot=robot))
             self.stream = self._file.stream
         self._episode: EpisodeBuffer | None = None
+        self._arm: tuple[Any, ArmDrawing | None] | None = None
         self._sender = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tolins-record")
         self._sent: list[Future[None]] = []
         self.episodes_recorded = 0
@@ -134,6 +138,9 @@ class RerunRecorder(gym.Wrapper):
             self.episodes_recorded, base.control_dt, metadata, base.collision_force
         )
         self._episode.on_reset(observation, info)
+        if base.settings.robot != "free":
+            self._episode.arm = self._arm_drawing(base)
+            self._episode.add_arm(base.backend.data)
         self.episodes_recorded += 1
         return observation, info
 
@@ -141,6 +148,8 @@ class RerunRecorder(gym.Wrapper):
         observation, reward, terminated, truncated, info = self.env.step(action)
         if self._episode is not None:
             self._episode.on_step(observation, action, reward, terminated, truncated, info)
+            if self._episode.arm is not None:
+                self._episode.add_arm(self.env.unwrapped.backend.data)
             if terminated or truncated:
                 self._send_pending()
         return observation, reward, terminated, truncated, info
@@ -172,6 +181,13 @@ class RerunRecorder(gym.Wrapper):
             self._sender.shutdown()
             super().close()
 
+    def _arm_drawing(self, base: InsertionEnv) -> ArmDrawing | None:
+        """The drawing of the robot of ``base``'s model now, kept per model."""
+        model = base.backend.model
+        if self._arm is None or self._arm[0] is not model:
+            self._arm = (model, arm_drawing(model))
+        return self._arm[1]
+
     def _send_pending(self) -> None:
         if self._episode is not None:
             episode, self._episode = self._episode, None
@@ -195,6 +211,7 @@ class RerunRecorder(gym.Wrapper):
                 policy=self.policy_name or "",
                 spec=json.dumps(spec_to_dict(base.nominal_socket)),
                 backend=base.backend_name,
+                robot=base.settings.robot,
                 control_dt=base.control_dt,
             ),
         )

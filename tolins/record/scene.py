@@ -28,7 +28,8 @@ PLUG_COLOR = (200, 60, 160)
 CARRIER_COLOR = (153, 153, 166, 110)
 
 
-def _mesh(mesh: TriangleMesh, color: tuple[int, ...]) -> rr.Mesh3D:
+def shaded_mesh(mesh: TriangleMesh, color: tuple[int, ...]) -> rr.Mesh3D:
+    """``mesh`` as a flat-shaded ``Mesh3D`` of one colour."""
     vertices, triangles, normals = flat_shaded(mesh)
     return rr.Mesh3D(
         vertex_positions=vertices,
@@ -42,7 +43,7 @@ def log_board(stream: rr.RecordingStream, spec: SocketSpec) -> None:
     """The world frame (z up, mm) and ``spec``'s board, static."""
     board = board_geometry(spec)
     stream.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    stream.log(f"{BOARD}/walls", _mesh(board.walls, BOARD_COLOR), static=True)
+    stream.log(f"{BOARD}/walls", shaded_mesh(board.walls, BOARD_COLOR), static=True)
     stream.log(
         f"{BOARD}/boxes",
         rr.Boxes3D(
@@ -84,7 +85,7 @@ def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsCompon
             fill_mode="solid",
         )
     else:
-        archetype = _mesh(pins.mesh, PIN_COLOR)
+        archetype = shaded_mesh(pins.mesh, PIN_COLOR)
     carrier = carrier_box(spec)
     carrier_archetype = rr.Boxes3D(
         centers=carrier.centers,

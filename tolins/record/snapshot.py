@@ -83,28 +83,34 @@ def cut_recording(
     stream = rr.RecordingStream(
         entry.application_id, recording_id=entry.recording_id, send_properties=False
     )
-    stream.save(Path(target), default_blueprint=_figure_blueprint(_extent(chunks)))
+    stream.save(Path(target), default_blueprint=_figure_blueprint(*_scene(chunks)))
     stream.send_chunks(chunks)
     stream.flush()
     stream.disconnect()
     return max(last["kept"], 0)
 
 
-def _figure_blueprint(extent: float | None) -> rrb.Blueprint:
+def _figure_blueprint(extent: float | None, robot: bool = False) -> rrb.Blueprint:
     """tolins's layout following the latest data, without the viewer's top bar."""
-    blueprint = default_blueprint(extent, follow=True)
+    blueprint = default_blueprint(extent, follow=True, robot=robot)
     blueprint.top_panel = rrb.TopPanel(state="hidden")
     return blueprint
 
 
-def _extent(chunks: list[Chunk]) -> float | None:
-    """The scene extent of the nominal spec in the recording's ``tolins`` properties."""
+def _first(values: list | None) -> object:
+    value = (values or [None])[0]
+    return value[0] if isinstance(value, list) and value else value
+
+
+def _scene(chunks: list[Chunk]) -> tuple[float | None, bool]:
+    """The scene extent of the nominal spec in the recording's ``tolins`` properties, and
+    whether a robot holds the part."""
     for chunk in chunks:
         if chunk.entity_path == "/__properties/tolins":
-            specs = chunk.to_record_batch().to_pydict().get("spec") or [None]
-            text = specs[0][0] if isinstance(specs[0], list) else specs[0]
+            columns = chunk.to_record_batch().to_pydict()
+            robot = _first(columns.get("robot")) not in (None, "free")
             try:
-                return scene_extent(spec_from_dict(json.loads(text)))
+                return scene_extent(spec_from_dict(json.loads(_first(columns.get("spec"))))), robot
             except (TypeError, ValueError):
-                return None
-    return None
+                return None, robot
+    return None, False

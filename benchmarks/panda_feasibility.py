@@ -19,8 +19,7 @@ the part held over the board, 1 mm off the holes, its target lowered 0.5, 1 and 
 below the contact, the board's push on the pins (their force sensor) against the wrist's
 estimate, and the part's slip in the hand.
 
-Not yet in tolins: a first measurement for the robot embodiment (the Panda ids, their
-control, sensing and validation are open work).
+The parts of the Panda ids one at a time; ``panda_validation.py`` runs the ids themselves.
 """
 
 from __future__ import annotations

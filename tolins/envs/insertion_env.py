@@ -172,6 +172,9 @@ class InsertionEnv(gym.Env, SettingsAttributes):
       itself changes 89 of them (1.1 %) when its start moves 1e-12 mm. What it may move
       is such a contact decided by the state's last bits, and the digits of forces and
       poses. The kinematic backend is the same in both.
+    * v2, after tolins 0.6.0: ``robot="panda"`` and its ids ``tolins/{name}Panda-v2`` (a
+      Franka Panda holds the part); ``robot="free"``, the default, is unchanged bit for
+      bit.
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
       ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
       the carrier collides with the board's top; reset poses and goals are validated;

@@ -123,3 +123,46 @@ def test_an_expert_on_mujoco_fails_blocked_holes_and_repeats_its_row(tmp_path):
     assert list(results["cells"]) == ["safe"]
     path = plot_robustness(tmp_path / "robustness.png", results)
     assert _png_size(path) > 0
+
+
+def test_the_pandas_table_runs_the_experts_on_the_arm_with_and_without_a_grasp_error(tmp_path):
+    from tolins.bench.reports.robustness import format_robot_section
+    from tolins.bench.table.robot import GRASP_ERROR, ROBOT, ROBOT_ENV
+
+    safe = ROBOT.policies[0]
+    spec = robustness_spec(safe, 0, None, TINY, "mujoco", ROBOT)
+    stage = robustness.robustness_stage(spec)
+    assert stage.name == "robot-safe-seed0"
+    assert stage.config["conditions"][1]["grasp_error"] == GRASP_ERROR
+    # The robustness table's stages keep their names and keys.
+    plain = robustness.robustness_stage(robustness_spec(safe, 0, None, TINY, "mujoco"))
+    assert plain.name == "robust-safe-seed0" and "grasp_error" not in str(plain.config)
+    folder = robustness.robustness_job(tmp_path, stage, None)
+    count = TINY.robustness_episodes
+    episodes = robustness.read_stage(folder, count, ROBOT.conditions)
+    assert set(episodes) == {"panda", "grasp"}
+    import gymnasium as gym
+
+    from tolins.policies import SafeExpert
+    from tolins.rollouts.episodes import run_episode
+
+    env = gym.make(ROBOT_ENV).unwrapped
+    seed = eval_seeds(0, count)[0]
+    again = run_episode(env, SafeExpert(), seed=seed)
+    assert episodes["panda"][0].reward == pytest.approx(again.reward)
+    results = robustness.robustness_results({stage.name: folder}, count, 1, ROBOT)
+    assert list(results["cells"]["safe"]) == ["panda", "grasp"]
+    lines = "\n".join(format_robot_section(results))
+    assert "## A robot holding the part (beyond the paper)" in lines
+    assert "| π_e^safe |" in lines and ROBOT_ENV in lines
+    # The grasp-error column joins the robustness table, the same episodes.
+    from tolins.bench.table.robot import with_grasp_column
+
+    plain_folder = robustness.robustness_job(tmp_path, plain, None)
+    table = robustness.robustness_results({plain.name: plain_folder}, count, 1)
+    merged = with_grasp_column(table, results)
+    assert [c["id"] for c in merged["conditions"]][-1] == "grasp"
+    assert merged["cells"]["safe"]["grasp"] == results["cells"]["safe"]["grasp"]
+    assert table["conditions"] == merged["conditions"][:-1]  # the input is left as it was
+    assert _png_size(plot_robustness(tmp_path / "merged.png", merged)) > 0
+    assert with_grasp_column(table, None) is table

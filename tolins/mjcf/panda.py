@@ -84,6 +84,15 @@ def panda_assets() -> Path:
     return folder
 
 
+def require_panda(user: str) -> None:
+    """Raise ``ImportError`` (``user`` needs the Panda model, and how to install it) unless
+    :func:`panda_assets` finds it; ``user`` names what needs it."""
+    try:
+        panda_assets()
+    except ImportError as error:
+        raise ImportError(f"{user} needs the Panda model ({error})") from None
+
+
 def _inner(text: str) -> str:
     """The content of a ``<mujocoinclude>`` file."""
     start, end = text.index("<mujocoinclude>"), text.rindex("</mujocoinclude>")

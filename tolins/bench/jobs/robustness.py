@@ -1,5 +1,7 @@
 """The robustness stages of ``tolins bench``: one per policy of the robustness table
-(:mod:`tolins.bench.table.robustness`) and training seed, ``robust-{policy}-seed{s}``.
+(:mod:`tolins.bench.table.robustness`) and training seed, ``robust-{policy}-seed{s}``,
+and the same for any other :class:`~tolins.bench.table.robustness.ConditionTable` (the
+Panda's, ``robot-{policy}-seed{s}``: :mod:`tolins.bench.table.robot`).
 
 A stage's config names the trained policy's stage (name and key, as the evaluation stages
 do) so that a retrained policy re-runs it; it evaluates the policy on every condition,
@@ -21,8 +23,9 @@ from tolins.bench.jobs.policy_episodes import episodes_to_json, evaluate
 from tolins.bench.store.cache import Stage, StageCache
 from tolins.bench.store.integrity import StageFileError, checked_episodes, read_json
 from tolins.bench.table.robustness import (
-    CONDITIONS,
-    POLICIES,
+    ROBUSTNESS,
+    Condition,
+    ConditionTable,
     RobustPolicy,
     SeedEpisodes,
     robustness_table,
@@ -30,10 +33,10 @@ from tolins.bench.table.robustness import (
 from tolins.bench.table.rows import CIRCLE_2X2
 from tolins.envs.tasks import DEFECT_SIGMA
 
-#: The file of a robustness stage: condition id -> its episodes.
-ROBUSTNESS = "robustness.json"
-#: The stage-name prefix.
-PREFIX = "robust-"
+#: The file of a stage: condition id -> its episodes.
+EPISODES = "robustness.json"
+#: The stage-name prefix of the robustness table's stages.
+PREFIX = ROBUSTNESS.prefix
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,7 @@ class RobustnessSpec:
         seeds: The evaluation seeds of every condition.
         policy_stage: The trained policy's stage folder (``name-key``); ``None`` for an
             expert.
+        table: The table whose line it is (the robustness table by default).
     """
 
     policy: RobustPolicy
@@ -54,10 +58,11 @@ class RobustnessSpec:
     backend: str
     seeds: tuple[int, ...]
     policy_stage: str | None
+    table: ConditionTable = ROBUSTNESS
 
 
-def stage_name(policy: RobustPolicy, seed: int) -> str:
-    return f"{PREFIX}{policy.id}-seed{seed}"
+def stage_name(policy: RobustPolicy, seed: int, table: ConditionTable = ROBUSTNESS) -> str:
+    return f"{table.prefix}{policy.id}-seed{seed}"
 
 
 def robustness_stage(spec: RobustnessSpec) -> Stage[RobustnessSpec]:
@@ -68,18 +73,23 @@ def robustness_stage(spec: RobustnessSpec) -> Stage[RobustnessSpec]:
     config = {
         "policy": asdict(spec.policy),
         "policy_stage": spec.policy_stage,
-        "conditions": [asdict(c) for c in CONDITIONS],
+        "conditions": [asdict(c) for c in spec.table.conditions],
         "backend": spec.backend,
         "seeds": list(spec.seeds),
         "tolins_version": tolins.__version__,
     }
-    return Stage(stage_name(spec.policy, spec.seed), config, spec)
+    return Stage(stage_name(spec.policy, spec.seed, spec.table), config, spec)
 
 
 def evaluate_conditions(
-    policy: RobustPolicy, policy_path: Path | None, backend: str, seeds: list[int]
+    policy: RobustPolicy,
+    policy_path: Path | None,
+    backend: str,
+    seeds: list[int],
+    conditions: tuple[Condition, ...] = ROBUSTNESS.conditions,
 ) -> SeedEpisodes:
-    """``policy``'s episodes on every condition from ``seeds``: condition id -> episodes.
+    """``policy``'s episodes on each of ``conditions`` from ``seeds``: condition id ->
+    episodes.
 
     A trained policy is bound to the paper's 2*2 (200 µm): the circle embedding of π_φ
     covers hole radii of 0.45–0.6 mm only, so π_φ sees every condition as the workpiece it
@@ -102,7 +112,7 @@ def evaluate_conditions(
             env_kwargs=c.env_kwargs,
             inference_sigma=DEFECT_SIGMA if policy.inference else None,
         )
-        for c in CONDITIONS
+        for c in conditions
     }
 
 
@@ -113,32 +123,37 @@ def robustness_job(root: Path, stage: Stage[RobustnessSpec], path: Path | None) 
     spec = stage.spec
 
     def build(folder: Path) -> None:
-        episodes = evaluate_conditions(spec.policy, path, spec.backend, list(spec.seeds))
-        atomic_json(folder / ROBUSTNESS, {k: episodes_to_json(v) for k, v in episodes.items()})
+        seeds, conditions = list(spec.seeds), spec.table.conditions
+        episodes = evaluate_conditions(spec.policy, path, spec.backend, seeds, conditions)
+        atomic_json(folder / EPISODES, {k: episodes_to_json(v) for k, v in episodes.items()})
 
     return StageCache(root).run_stage(stage, build)
 
 
-def read_stage(folder: Path, count: int) -> SeedEpisodes:
-    """The episodes of the robustness stage in ``folder`` (``count`` per condition),
-    checked."""
-    path = folder / ROBUSTNESS
+def read_stage(
+    folder: Path, count: int, conditions: tuple[Condition, ...] = ROBUSTNESS.conditions
+) -> SeedEpisodes:
+    """The episodes of the stage in ``folder`` (``count`` per condition of
+    ``conditions``), checked."""
+    path = folder / EPISODES
     data = read_json(path)
-    if not isinstance(data, dict) or set(data) != {c.id for c in CONDITIONS}:
-        raise StageFileError(f"{path}: not a robustness stage; delete its folder to rerun")
-    return {c.id: checked_episodes(path, data[c.id], count) for c in CONDITIONS}
+    if not isinstance(data, dict) or set(data) != {c.id for c in conditions}:
+        raise StageFileError(f"{path}: not a stage of this table; delete its folder to rerun")
+    return {c.id: checked_episodes(path, data[c.id], count) for c in conditions}
 
 
 def robustness_results(
-    stage_folders: dict[str, Path], count: int, seeds: int
+    stage_folders: dict[str, Path], count: int, seeds: int, table: ConditionTable = ROBUSTNESS
 ) -> dict[str, Any] | None:
-    """``results.json["robustness"]`` (:func:`~tolins.bench.table.robustness.
+    """``results.json[table.key]`` (:func:`~tolins.bench.table.robustness.
     robustness_table`) from the finished stages in ``stage_folders`` (stage name ->
     folder; ``count`` episodes per condition); a policy counts when its stages of every
     training seed are there."""
     episodes = {}
-    for policy in POLICIES:
-        folders = [stage_folders.get(stage_name(policy, s)) for s in range(seeds)]
+    for policy in table.policies:
+        folders = [stage_folders.get(stage_name(policy, s, table)) for s in range(seeds)]
         if all(folder is not None for folder in folders):
-            episodes[policy.id] = [read_stage(folder, count) for folder in folders]
-    return robustness_table(episodes, count, seeds)
+            episodes[policy.id] = [
+                read_stage(folder, count, table.conditions) for folder in folders
+            ]
+    return robustness_table(episodes, count, seeds, table)

@@ -32,6 +32,8 @@ class BenchConfig:
         out: Output folder.
         study: Run the inference study.
         robustness: Run the robustness table (:mod:`tolins.bench.table.robustness`).
+        robot: Run the Panda's table (:mod:`tolins.bench.table.robot`; MuJoCo only, needs
+            ``tolins[robot]``).
         workers: Threads evaluating rows side by side (results do not depend on it).
         executor: ``local`` (this process) or ``ray`` (Ray tasks; ``tolins[ray]``): where
             the stages run (:mod:`tolins.bench.pipeline.executor`; results do not depend on it).
@@ -46,6 +48,7 @@ class BenchConfig:
     out: str = "bench"
     study: bool = True
     robustness: bool = True
+    robot: bool = True
     workers: int = 2
     executor: str = "local"
     address: str | None = None
@@ -90,3 +93,5 @@ class BenchRun:
     checked)."""
     robustness: dict[str, Any] | None = None
     """``results.json["robustness"]`` (:func:`tolins.bench.jobs.robustness.robustness_results`)."""
+    robot: dict[str, Any] | None = None
+    """``results.json["robot"]``: the Panda's table (:mod:`tolins.bench.table.robot`)."""

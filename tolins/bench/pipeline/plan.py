@@ -18,7 +18,7 @@ from tolins.bench.pipeline import settings
 from tolins.bench.pipeline.executor import Job
 from tolins.bench.pipeline.profiles import Profile
 from tolins.bench.store.cache import Stage, StageCache
-from tolins.bench.table.robustness import POLICIES
+from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable
 from tolins.bench.table.rows import TRAININGS, Row
 
 
@@ -156,18 +156,19 @@ def plan_evaluations(
             )
 
 
-def plan_robustness(plan: Plan, seeds: int, profile: Profile, backend: str) -> None:
-    """The robustness stages of every policy whose training this run has, for each
-    training seed."""
-    for policy in POLICIES:
+def plan_robustness(
+    plan: Plan, seeds: int, profile: Profile, backend: str, table: ConditionTable = ROBUSTNESS
+) -> None:
+    """The stages of ``table`` (the robustness table's by default) of every policy whose
+    training this run has, for each training seed."""
+    for policy in table.policies:
         if policy.trained and training.stage_name(policy.agent, 0) not in plan:
             continue  # the selected rows do not train it
         for seed in range(seeds):
             upstream, policy_stage = _policy(plan, policy.agent, seed)
+            spec = settings.robustness_spec(policy, seed, policy_stage, profile, backend, table)
             plan.add(
-                robustness.robustness_stage(
-                    settings.robustness_spec(policy, seed, policy_stage, profile, backend)
-                ),
+                robustness.robustness_stage(spec),
                 robustness.robustness_job,
                 upstream=upstream,
                 side_by_side=True,

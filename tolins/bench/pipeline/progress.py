@@ -32,17 +32,19 @@ from tolins.bench.jobs.trajectories import NAME as TRAJECTORIES
 from tolins.bench.jobs.trajectories import POINTS as TRAJECTORY_EPISODES
 from tolins.bench.pipeline import settings
 from tolins.bench.pipeline.profiles import Profile
-from tolins.bench.table.robustness import CONDITIONS, POLICIES
+from tolins.bench.table.robot import ROBOT
+from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable
 from tolins.bench.table.rows import ALL_ROWS, SB3_METHODS, TRAININGS
 from tolins.paper import HORIZON
 
 #: The kinds of stages, in the order a run meets them.
-KINDS = ("demonstrations", "training", "evaluation", "robustness", "study")
+KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "study")
 #: Seconds per budgeted env step (per BC sample and epoch, per study workpiece) of each
 #: kind of work on the MuJoCo backend, 2 cores (``reference:quick``'s stage wall times;
 #: the deep-RL baselines': benchmarks/README.md, two stages side by side).
 STEP_SECONDS = {
     "rollout": 1.75e-3,  # an evaluation, robustness or demonstration episode's step
+    "panda-rollout": 25e-3,  # a step of the Panda's table (benchmarks/panda_validation.py)
     "rs-gail": 1.4e-3,
     "tolerance-guided": 0.6e-3,
     "ppo": 1.5e-3,  # on 8 envs in one batch
@@ -69,6 +71,8 @@ def stage_kind(name: str) -> str:
         return "evaluation"
     if name.startswith(ROBUST):
         return "robustness"
+    if name.startswith(ROBOT.prefix):
+        return "robot"
     return "study" if name == study.NAME else "training"
 
 
@@ -104,11 +108,13 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
         row = next(same, None)
         factor = INFERENCE_FACTOR if row is not None and row.inference else 1.0
         return profile.eval_episodes * HORIZON * factor, "rollout"
-    if kind == "robustness":
-        policies = (p for p in POLICIES if _unseeded(robustness.stage_name(p, 0)) == base)
-        policy = next(policies, None)
+    if kind in ("robustness", "robot"):
+        table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
+        named = (p for p in table.policies if _unseeded(robustness.stage_name(p, 0, table)) == base)
+        policy = next(named, None)
         factor = INFERENCE_FACTOR if policy is not None and policy.inference else 1.0
-        return profile.robustness_episodes * len(CONDITIONS) * HORIZON * factor, "rollout"
+        episodes = profile.robustness_episodes * len(table.conditions)
+        return episodes * HORIZON * factor, "rollout" if kind == "robustness" else "panda-rollout"
     training = TRAININGS.get(base)
     if training is None:
         return 0.0, "rollout"

@@ -42,8 +42,10 @@ from tolins.bench.store.cache import StageCache
 from tolins.bench.store.integrity import StageFileError, read_json
 from tolins.bench.table.claims import check_claims
 from tolins.bench.table.results import row_entry
+from tolins.bench.table.robot import ROBOT, with_grasp_column
 from tolins.bench.table.rows import select_rows
 from tolins.datasets.reader import require_minari
+from tolins.mjcf.panda import require_panda
 
 
 def run_bench(
@@ -79,6 +81,9 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         plan_evaluations(plan, rows, seeds, profile, backend)
         if config.robustness:
             plan_robustness(plan, seeds, profile, backend)
+        if config.robot and backend == "mujoco":
+            require_panda("tolins bench (its Panda table; --no-robot leaves it out)")
+            plan_robustness(plan, seeds, profile, backend, ROBOT)
         if config.study:
             workers = 2 if local else 1  # a Ray task holds one CPU
             plan_study(plan, profile, backend, workers, inner_bars)
@@ -115,6 +120,10 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
             raise StageFileError(f"{path}: not an inference study; delete its folder to rerun")
     if config.robustness:
         run.robustness = robustness_results(run.stage_folders, profile.robustness_episodes, seeds)
+    if config.robot and backend == "mujoco":
+        count = profile.robustness_episodes
+        run.robot = robustness_results(run.stage_folders, count, seeds, ROBOT)
+        run.robustness = with_grasp_column(run.robustness, run.robot)
     run.wall_s = time.perf_counter() - began
     write_reports(run, seeds)
     write_timeline(out, run)
@@ -138,7 +147,7 @@ def _log_done(
     stages.finish(job.name, wall_s)
     if job.name.startswith("demos-"):
         log(f"{job.name}: {plan.stages[job.name].spec.episodes} episodes written ({wall_s:.0f} s)")
-    elif job.name.startswith(PREFIX):
+    elif job.name.startswith((PREFIX, ROBOT.prefix)):
         log(f"{job.name}: evaluated ({wall_s:.0f} s)")
     elif job.name in plan.trainings:
         log(f"{job.name}: trained ({wall_s:.0f} s)")

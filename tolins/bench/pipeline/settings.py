@@ -12,7 +12,7 @@ from tolins.bench.jobs.row_evaluation import EvaluationSpec
 from tolins.bench.jobs.training import TrainingSpec
 from tolins.bench.pipeline.profiles import Profile
 from tolins.bench.store.cache import Stage
-from tolins.bench.table.robustness import RobustPolicy
+from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable, RobustPolicy
 from tolins.bench.table.rows import SB3_METHODS, TRAININGS, Row, Training
 from tolins.bench.table.seeds import eval_seeds
 
@@ -66,13 +66,18 @@ def evaluation_spec(
 
 
 def robustness_spec(
-    policy: RobustPolicy, seed: int, policy_stage: str | None, profile: Profile, backend: str
+    policy: RobustPolicy,
+    seed: int,
+    policy_stage: str | None,
+    profile: Profile,
+    backend: str,
+    table: ConditionTable = ROBUSTNESS,
 ) -> RobustnessSpec:
-    """``policy``'s line of the robustness table for training seed ``seed``
-    (``policy_stage``: its training's stage folder, ``None`` for an expert): the profile's
-    robustness episodes per condition."""
+    """``policy``'s line of ``table`` (the robustness table's by default) for training seed
+    ``seed`` (``policy_stage``: its training's stage folder, ``None`` for an expert): the
+    profile's robustness episodes per condition."""
     seeds = tuple(eval_seeds(seed, profile.robustness_episodes))
-    return RobustnessSpec(policy, seed, backend, seeds, policy_stage)
+    return RobustnessSpec(policy, seed, backend, seeds, policy_stage, table)
 
 
 def study_settings(profile: Profile, backend: str, workers: int = 2) -> StudyConfig:

@@ -24,9 +24,9 @@ KINDS = {
 def stage_kind(name: str) -> str:
     """``demonstrations``, ``training``, ``evaluation`` or ``study`` for a stage name: the
     progress bar's kinds (:func:`~tolins.bench.pipeline.progress.stage_kind`), the
-    robustness stages drawn as the evaluations they are."""
+    robustness and robot stages drawn as the evaluations they are."""
     kind = progress_kind(name)
-    return "evaluation" if kind == "robustness" else kind
+    return "evaluation" if kind in ("robustness", "robot") else kind
 
 
 def worker_label(entry: dict[str, Any]) -> str:

@@ -7,7 +7,7 @@ import datetime
 from typing import TYPE_CHECKING, Any
 
 from tolins.bench.reference import PREFIX, reference_path
-from tolins.bench.reports.robustness import format_section
+from tolins.bench.reports.robustness import format_robot_section, format_section
 from tolins.bench.table.baselines import CurveSummary, summarise_curves
 from tolins.bench.table.claims import CEILING, SMALLEST_EFFECT, ClaimCheck
 from tolins.bench.table.force_table import FORCE_NOTE, format_force_table
@@ -218,6 +218,7 @@ def format_markdown(
         parts += ["", "## Inference study", "", format_study(run.study), ""]
         parts += ["![inference study](inference_study.png)"]
     parts += format_section(run.robustness)
+    parts += format_robot_section(run.robot)
     if other is not None:
         parts += [
             "",

@@ -1,5 +1,6 @@
 """The robustness table in a bench's reports: its section of ``results.md`` and
-``robustness.png`` (the table itself: :mod:`tolins.bench.table.robustness`)."""
+``robustness.png`` (the table itself: :mod:`tolins.bench.table.robustness`); and the
+Panda's table's section (:mod:`tolins.bench.table.robot`)."""
 
 from __future__ import annotations
 
@@ -44,9 +45,11 @@ def format_section(robustness: dict[str, Any] | None) -> list[str]:
         f"episode{'s' if count > 1 else ''} per cell and training seed (the rows' evaluation "
         "seeds). Columns: the radial "
         "clearance of the holes (200 µm is the paper's 2*2, the others "
-        "`tolins/Circle2x2Fit{µm}-v1`), a defect kind drawn every episode at 200 µm "
+        "`tolins/Circle2x2Fit{µm}-v2`), a defect kind drawn every episode at 200 µm "
         f"(`defects=`: {defects}; mm, pitch relative), randomised physics "
-        "(`randomization='default'`). A blocked hole never inserts. π_φ* is π_φ with "
+        "(`randomization='default'`), and, where the bench ran its Panda table, a Franka "
+        "Panda holding the part with a grasp error (the next section's column). A blocked "
+        "hole never inserts. π_φ* is π_φ with "
         "inference in the loop, as in C4.2 "
         f"(its prior: bent pins of std {DEFECT_SIGMA} mm, whatever the condition); π_n and "
         "π_φ are bound to the paper's 2*2, the workpiece π_φ's embedding knows (hole radii "
@@ -61,6 +64,40 @@ def format_section(robustness: dict[str, Any] | None) -> list[str]:
         format_table(robustness),
         "",
         "![success against clearance and under defects](robustness.png)",
+    ]
+
+
+def format_robot_section(robot: dict[str, Any] | None) -> list[str]:
+    """``results.md``'s lines of the Panda's table (none without one)."""
+    if robot is None:
+        return []
+    seeds, count = robot["seeds"], robot["episodes_per_seed"]
+    over = f"the {seeds} training seeds" if seeds > 1 else "the episodes of the one seed"
+    grasp = next(c for c in robot["conditions"] if c.get("grasp_error"))
+    note = (
+        f"Success rate [95 % CI over {over}] of the 2*2 circle's policies with a Franka "
+        f"Panda holding the part (`{grasp['env_id']}`: task-space impedance control, a "
+        "friction grasp, the pose from forward kinematics and the force from the wrist; "
+        f"docs/robot.md), {count} episode{'s' if count > 1 else ''} per cell and training "
+        "seed (the rows' evaluation seeds). Every policy was trained on the free body, the "
+        "paper's ideal servos. Columns: the nominal grasp, and the part put off in the hand "
+        f"every episode (`grasp_error={list(grasp['grasp_error'])}`, std of x, y (mm) and yaw "
+        "(rad) in the hand; the closing fingers centre it across the pads). π_φ* is π_φ with "
+        "inference in the loop, as in C4.2."
+    )
+    means = " ".join(
+        f"{policy['label']} {robot['cells'][policy['id']]['panda']['reward_mean']:.2f};"
+        for policy in robot["policies"]
+    )
+    return [
+        "",
+        "## A robot holding the part (beyond the paper)",
+        "",
+        note,
+        "",
+        format_table(robot),
+        "",
+        f"Mean reward with the nominal grasp: {means.rstrip(';')}.",
     ]
 
 
@@ -101,7 +138,9 @@ def plot_robustness(path: str | Path, robustness: dict[str, Any]) -> Path:
     left.legend()
     right.set_xticks(np.arange(len(others)), [c["label"] for c in others])
     right.set_ylim(-0.05, 1.05)
-    right.set_title("defects and randomised physics (2*2, 200 µm)")
+    robot = any(c["group"] == "robot" for c in others)
+    held = ", a Panda with a grasp error" if robot else ""
+    right.set_title(f"defects, randomised physics{held} (2*2, 200 µm)")
     right.grid(axis="y", alpha=0.3)
     over = "training seeds" if robustness["seeds"] > 1 else "episodes"
     figure.suptitle(f"Robustness: success rate, 95 % CI over {over}")

@@ -17,6 +17,7 @@ from tolins.bench.reports.robustness import plot_robustness
 from tolins.bench.store.integrity import StageFileError
 from tolins.bench.table.baselines import curves_json, env_step_curves
 from tolins.bench.table.results import read_results, results_document
+from tolins.bench.table.robot import KEY as ROBOT_KEY
 from tolins.bench.table.robustness import KEY
 from tolins.bench.table.rows import ALL_ROWS
 from tolins.physics import BACKENDS
@@ -35,6 +36,8 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
     document["claims"] = {check.claim.name: check.to_json() for check in run.claims}
     if run.robustness is not None:
         document[KEY] = run.robustness
+    if run.robot is not None:
+        document[ROBOT_KEY] = run.robot
     written = [
         atomic_json(out / "results.json", document),
         atomic_json(out / f"results.{backend}.json", document),

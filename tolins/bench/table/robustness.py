@@ -127,30 +127,55 @@ POLICIES: tuple[RobustPolicy, ...] = (
 SeedEpisodes = dict[str, list[Episode]]
 
 
+@dataclass(frozen=True)
+class ConditionTable:
+    """A table of policies under conditions: this robustness table, or another built the
+    same way (the Panda's, :mod:`tolins.bench.table.robot`).
+
+    Attributes:
+        key: Its key in ``results.json``.
+        prefix: Its stages' name prefix (``{prefix}{policy}-seed{s}``).
+        policies: Its lines.
+        conditions: Its columns.
+    """
+
+    key: str
+    prefix: str
+    policies: tuple[RobustPolicy, ...]
+    conditions: tuple[Condition, ...]
+
+
+#: This module's table.
+ROBUSTNESS = ConditionTable(KEY, "robust-", POLICIES, CONDITIONS)
+
+
 def robustness_table(
-    episodes: dict[str, list[SeedEpisodes]], count: int, seeds: int
+    episodes: dict[str, list[SeedEpisodes]],
+    count: int,
+    seeds: int,
+    table: ConditionTable = ROBUSTNESS,
 ) -> dict[str, Any] | None:
     """``results.json["robustness"]`` from the episodes of each policy that ran (policy id
     -> one :data:`SeedEpisodes` per training seed; ``None`` when none ran): the
     conditions, the policies, and per policy and condition a Table 1 entry
     (:func:`~tolins.bench.table.results.row_entry`) with ``condition`` and
-    ``clearance_um``; ``count`` episodes per cell and training seed."""
+    ``clearance_um``; ``count`` episodes per cell and training seed (of ``table``)."""
     cells: dict[str, dict[str, Any]] = {}
     policies = []
-    for policy in POLICIES:
+    for policy in table.policies:
         if policy.id not in episodes:
             continue
         per_seed = episodes[policy.id]
         policies.append(asdict(policy))
         cells[policy.id] = {}
-        for c in CONDITIONS:
+        for c in table.conditions:
             row = Row(f"{policy.id}/{c.id}", policy.label, policy.agent, c.env_id, "2*2")
             entry = row_entry(row, [seed[c.id] for seed in per_seed])
             cells[policy.id][c.id] = {"condition": c.id, "clearance_um": c.clearance_um, **entry}
     if not cells:
         return None
     return {
-        "conditions": [asdict(c) for c in CONDITIONS],
+        "conditions": [asdict(c) for c in table.conditions],
         "policies": policies,
         "episodes_per_seed": count,
         "seeds": seeds,

@@ -16,7 +16,6 @@ from tolins.physics.panda import PandaStepper, compile_panda_world, split_draw
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.registry import check_robot
-from tolins.physics.schedule import control_plan
 from tolins.physics.servo import ServoStepper
 from tolins.physics.versions import VERSIONS, PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
@@ -137,8 +136,7 @@ class PandaInsertionPhysics(InsertionPhysics):
     version: PhysicsVersion = VERSIONS[2]
 
     def _bind_stepper(self) -> None:
-        nstep = control_plan(self.model.ptr, CONTROL_DT, None)[0]
-        self.stepper = PandaStepper(self.model.ptr, self.data.ptr, nstep * self.timestep())
+        self.stepper = PandaStepper(self.model.ptr, self.data.ptr, CONTROL_DT)
         self._bound()
 
     @classmethod

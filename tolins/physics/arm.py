@@ -8,12 +8,11 @@ Jacobian, damped-least-squares IK within the joint limits, and the operational-s
 with ``e = [e_p, e_r]`` the grip site's position (mm) and rotation (rad) error (the
 position error's pull clipped on each of x, y and z to the force limit of :class:`Gains`
 over that axis's task inertia ``Λ_ii``: a blocked arm pushes with a bounded force, as the
-servos do), ``v*``
-the commanded
-twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-space inertia, ``N = I − Jᵀ J̄ᵀ`` the null space of
-the dynamically consistent inverse ``J̄ = M⁻¹ Jᵀ Λ`` (a posture ``q₀`` held there), ``b``
-gravity and Coriolis (MuJoCo's ``qfrc_bias``), ``m g`` the weight of the part held at the
-grip site (``payload``, as a real Franka is told its load), clipped to the Franka's torque limits.
+servos do), ``v*`` the commanded twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-space inertia,
+``N = I − Jᵀ J̄ᵀ`` the null space of the dynamically consistent inverse ``J̄ = M⁻¹ Jᵀ Λ``
+(a posture ``q₀`` held there), ``b`` gravity and Coriolis (MuJoCo's ``qfrc_bias``) and
+``m g`` the weight of the part held at the grip site (``payload``, as a real Franka is
+told its load); τ is clipped to the Franka's torque limits.
 :func:`place_grasp` puts the hand around the part's handle at a pose and welds the part
 to it while the fingers close. What a robot knows of the part: :func:`nominal_pose` (the
 grip site's forward kinematics and the nominal grasp) and :func:`wrist_wrench` (the wrist

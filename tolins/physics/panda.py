@@ -9,11 +9,12 @@ torques held between updates while MuJoCo steps on).
 
 The law's target moves with the commanded twist and is kept within one control step's
 travel at full speed (:data:`~tolins.paper.A_MAX` × the control period, per axis) of where
-the robot's forward kinematics put the grip site: a blocked arm pushes with the law's
-stiffness over that lag, not more, as the free body's servos push with at most their
-force limit. Unlike the servos, the arm is compliant: it does not stop at the first
-contact but presses until the law's force balances the board's, and it lags its target
-while it moves (``benchmarks/panda_validation.py`` measures both).
+the robot's forward kinematics put the grip site, and the law's spring force is clipped
+(:attr:`~tolins.physics.arm.Gains.force_limit`): a blocked arm pushes with at most that
+force, as the free body's servos push with at most their force limit. Unlike the
+servos, the arm is compliant: it does not stop at the first contact but presses until
+the law's force balances the board's, and it lags its target while it moves
+(``benchmarks/panda_validation.py`` measures both).
 
 A reset puts the hand around the handle where the part is meant to be (IK), welds the part
 to the hand while the fingers close for :data:`SETTLE` s, then releases the weld: from
@@ -95,8 +96,7 @@ def update_plan(nstep: int, checks: int, every: int) -> tuple[tuple[int, bool, b
     the law updated before a segment that starts on a multiple of ``every`` steps, the
     contacts read after one that ends a contact chunk (:func:`contact_chunks`)."""
     ends = np.cumsum(contact_chunks(nstep, checks)).tolist()
-    cuts = sorted(set(range(0, nstep, every)) | set(ends) | {0})
-    bounds = [*cuts, nstep] if cuts[-1] != nstep else cuts
+    bounds = sorted(set(range(0, nstep, every)) | set(ends))  # ends holds nstep
     return tuple(
         (end - start, start % every == 0, end in ends) for start, end in itertools.pairwise(bounds)
     )
@@ -137,7 +137,6 @@ class PandaSimulations:
         model = arm.model
         self.every = check_law_rate(model, law_rate)
         self.nstep, self.checks = control_plan(model, control_dt, contact_checks)
-        self.control_dt = control_dt
         n = len(datas)
         self.target = np.zeros((n, 3))
         self.yaw = np.zeros(n)
@@ -272,8 +271,8 @@ class PandaBatch(Capabilities):
 
     Every defect kind but a plugged hole (which adds a board piece and so moves the
     addresses the arm's law reads) can be a simulation's workpiece: it then runs on the
-    world compiled for it. Randomised physics is not drawn
-    for the arm (yet): its terms would need the arm's own.
+    world compiled for it. A randomised draw (``set_physics``) scales the contact terms of
+    the simulation's model copy and the law's gains (:func:`split_draw`).
 
     Args:
         socket: The nominal socket; every simulation starts with it.
@@ -290,7 +289,6 @@ class PandaBatch(Capabilities):
     supports_randomization = True
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
-    batch_options = frozenset({"persistent"})
 
     def __init__(
         self,
@@ -301,7 +299,6 @@ class PandaBatch(Capabilities):
         law_rate: int = LAW_RATE,
         gains: Gains | None = None,
         contact_checks: int | None = None,
-        persistent: bool = True,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         self.version = physics_version_of(physics_version)

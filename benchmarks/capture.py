@@ -5,6 +5,7 @@ Usage::
     python benchmarks/capture.py                   # 4 cases × 2 speeds, about a minute
     python benchmarks/capture.py --eager-sensors   # sensors in every physics step
     python benchmarks/capture.py --physics-version 2   # the ``-v2`` physics
+    python benchmarks/capture.py --robot panda     # a Franka Panda holding the part (-v2)
 
 For each case (2*2 socket offset in x and in theta, square and hexagon peg offset in
 x) and push speed (2.5 and 0.5 mm/s), the offset is bisected between one that inserts
@@ -14,6 +15,12 @@ until success (tips 1 mm down) or 5 control steps (fast) / 10 (slow), as in
 ``physics_vs_geometry.py``. The result is the largest offset found to insert, to
 ``--resolution`` (default 0.01 µm, 0.001 mrad); the excess over the geometric limit is
 the capture.
+
+With ``--robot panda`` the part is held by the arm (``InsertionEnv(..., robot="panda")``,
+``-v2``) and the offset asked of the reset is where the robot believes the part; the
+grasp moves it a little as the fingers close, so the table also gives the part's true
+offset at the reset (``info["pose"]``) at the boundary found, and the capture over the
+geometric limit of that true offset.
 """
 
 from __future__ import annotations
@@ -50,33 +57,44 @@ CASES = [
 ]
 
 
-def inserts(env: InsertionEnv, axis: int, offset: float, speed: float) -> bool:
-    """Whether a push down at ``speed`` from ``offset`` on ``axis`` inserts."""
+def inserts(
+    env: InsertionEnv, axis: int, offset: float, speed: float
+) -> tuple[bool, tuple[float, float]]:
+    """Whether a push down at ``speed`` from ``offset`` on ``axis`` inserts, and the
+    part's true offset on ``axis`` at the reset and after the first control step."""
     pose = np.array([0.0, 0.0, 0.0, 0.05])
     pose[axis] = offset
-    env.reset(options={"pose": pose})
+    _, info = env.reset(options={"pose": pose})
+    true = [float(info["pose"][axis])]
     for _ in range(STEPS[speed]):
         *_, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
+        true = [*true, float(info["pose"][axis])][:2]
         if info["success"]:
-            return True
+            return True, tuple(true)
         if terminated or truncated:
             break
-    return False
+    return False, tuple(true)
 
 
 def largest_inserting(
-    case: Case, speed: float, resolution: float, physics_version: int = 1
-) -> float:
-    """Bisection between ``case.inside`` and ``case.outside``; ``ValueError`` if they do
+    case: Case, speed: float, resolution: float, physics_version: int = 1, robot: str = "free"
+) -> tuple[float, tuple[float, float]]:
+    """Bisection between ``case.inside`` and ``case.outside`` (0 and 1.5 × that for the
+    Panda, whose grasp moves the part): the largest offset asked of the reset that
+    inserts, and the part's true offsets then (:func:`inserts`); ``ValueError`` if they do
     not bracket the change."""
-    env = InsertionEnv(case.socket, measurement_noise=0, physics_version=physics_version)
-    lo, hi = case.inside, case.outside
-    if not inserts(env, case.axis, lo, speed) or inserts(env, case.axis, hi, speed):
+    env = InsertionEnv(
+        case.socket, measurement_noise=0, physics_version=physics_version, robot=robot
+    )
+    lo, hi = (case.inside, case.outside) if robot == "free" else (0.0, 1.5 * case.outside)
+    (low_in, true_lo), (high_in, _) = (inserts(env, case.axis, v, speed) for v in (lo, hi))
+    if not low_in or high_in:
         raise ValueError(f"{case.name} at {speed} mm/s: {lo}..{hi} does not bracket the change")
     while hi - lo > resolution:
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if inserts(env, case.axis, mid, speed) else (lo, mid)
-    return lo
+        went_in, true_mid = inserts(env, case.axis, mid, speed)
+        lo, hi, true_lo = (mid, hi, true_mid) if went_in else (lo, mid, true_lo)
+    return lo, true_lo
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,18 +108,35 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
     )
+    parser.add_argument(
+        "--robot", choices=("free", "panda"), default="free", help="what holds the part"
+    )
     args = parser.parse_args(argv)
+    if args.robot == "panda" and args.physics_version != 2:
+        parser.error("--robot panda steps the -v2 physics only; add --physics-version 2")
     ServoStepper.lazy_sensors = not args.eager_sensors
     start = time.perf_counter()
-    print("| case | 2.5 mm/s | 0.5 mm/s | capture fast / slow (µm or mrad) |")
-    print("|---|---|---|---|")
+    panda = args.robot == "panda"
+    extra = " true offset at the reset → after one step, fast; slow | its capture fast; slow |"
+    print("| case | 2.5 mm/s | 0.5 mm/s | capture fast / slow (µm or mrad) |" + extra * panda)
+    print("|---|---|---|---|" + "---|---|" * panda)
     for case in CASES:
         step = args.resolution / (10 if case.axis == 2 else 1)
-        fast, slow = (largest_inserting(case, s, step, args.physics_version) for s in (FAST, SLOW))
-        print(
+        (fast, true_fast), (slow, true_slow) = (
+            largest_inserting(case, s, step, args.physics_version, args.robot) for s in (FAST, SLOW)
+        )
+        row = (
             f"| {case.name} ({case.limit:g}) | {fast:.5f} | {slow:.5f} | "
             f"{(fast - case.limit) * 1e3:+.1f} / {(slow - case.limit) * 1e3:+.1f} |"
         )
+        if panda:
+            (a, b), (c, d) = true_fast, true_slow
+            over = [(v - case.limit) * 1e3 for v in (a, b, c, d)]
+            row += (
+                f" {a:.5f} → {b:.5f}; {c:.5f} → {d:.5f} | {over[0]:+.1f} → {over[1]:+.1f}; "
+                f"{over[2]:+.1f} → {over[3]:+.1f} |"
+            )
+        print(row)
     print(f"total {time.perf_counter() - start:.0f} s")
     return 0
 

@@ -87,7 +87,7 @@ def capture_um(spec, axis: int) -> float:
     blocked = 1.5 * limit if axis == 0 else min(1.5 * limit, 0.99 * THETA_RANGE)
     case = capture.Case("", spec, axis, limit, 0.8 * limit, blocked)
     resolution = 0.001 * spec.clearance * (1 if axis == 0 else 1 / 4.0)
-    excess = capture.largest_inserting(case, capture.FAST, resolution) - limit
+    excess = capture.largest_inserting(case, capture.FAST, resolution)[0] - limit
     arm = 1.0 if axis == 0 else float(np.max(np.linalg.norm(pvg.pin_points(spec), axis=1)))
     return excess * arm * 1e3
 

@@ -8,6 +8,7 @@ Usage::
     python benchmarks/physics_vs_geometry.py --hole-sides 32   # experiment: finer round holes
     python benchmarks/physics_vs_geometry.py --grade 20    # 2*2, 2*8, square, hexagon at 20 µm
     python benchmarks/physics_vs_geometry.py --physics-version 2   # the ``-v2`` physics
+    python benchmarks/physics_vs_geometry.py --physics-version 2 --robot panda  # the arm
 
 ``--grade UM`` probes the 2*2 and 2*8 sockets and the square and hexagon pegs with their
 holes resized to a radial clearance of UM µm (``tolins.geometry.specs.with_clearance``,
@@ -92,6 +93,7 @@ class Socket:
     family: str
     spec: object
     physics_version: int = 1
+    robot: str = "free"
 
 
 def graded_sockets(grade_um: float) -> list[Socket]:
@@ -282,20 +284,25 @@ def env_for(sock: Socket) -> InsertionEnv:
     envs = getattr(_local, "envs", None)
     if envs is None:
         envs = _local.envs = {}
-    key = (sock.name, sock.physics_version)
+    key = (sock.name, sock.physics_version, sock.robot)
     if key not in envs:
         envs[key] = InsertionEnv(
-            sock.spec, measurement_noise=0, physics_version=sock.physics_version
+            sock.spec,
+            measurement_noise=0,
+            physics_version=sock.physics_version,
+            robot=sock.robot,
         )
     return envs[key]
 
 
-def push(sock: Socket, pose: np.ndarray, speed: float) -> tuple[str, float, float]:
-    """Drop ``sock``'s workpiece at ``pose`` and push down: (outcome, final z, seconds)."""
+def push(sock: Socket, pose: np.ndarray, speed: float) -> tuple[str, float, float, np.ndarray]:
+    """Drop ``sock``'s workpiece at ``pose`` and push down: (outcome, final z, seconds,
+    the part's true ``[x, y, theta]`` at the reset: ``pose`` itself but for the Panda,
+    whose closing fingers move the part in the hand)."""
     start = time.perf_counter()
     env = env_for(sock)
-    env.reset(options={"pose": [*pose, START_HEIGHT]})
-    info = {}
+    _, info = env.reset(options={"pose": [*pose, START_HEIGHT]})
+    true = np.asarray(info["pose"])[:3].copy()
     for _ in range(STEPS[speed]):
         _, _, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
         if terminated or truncated:
@@ -307,10 +314,26 @@ def push(sock: Socket, pose: np.ndarray, speed: float) -> tuple[str, float, floa
         outcome = "surface"
     else:
         outcome = "stuck"
-    return outcome, z, time.perf_counter() - start
+    return outcome, z, time.perf_counter() - start, true
 
 
-def run_chunk(sock: Socket, chunk: list[Probe], speed: float) -> list[tuple[str, float, float]]:
+def at_true_poses(sock: Socket, probes: list[Probe], results, seed: int, directions: int):
+    """``probes`` judged again where the part truly was at the reset (``results[k][3]``):
+    the Panda's probes, whose grasp moved the part from the pose asked."""
+    rng = np.random.default_rng([seed, 7, sum(map(ord, sock.name))])
+    hint = np.array([1.0, 0.0, 0.0])
+    judged = []
+    for probe, result in zip(probes, results, strict=True):
+        pose = result[3]
+        distance = boundary_distance(sock.spec, pose, rng, directions, hint)
+        inside = bool(contains(sock.spec, pose))
+        judged.append(
+            dataclasses.replace(probe, pose=pose, distance_um=distance * 1e3, inside=inside)
+        )
+    return judged
+
+
+def run_chunk(sock: Socket, chunk: list[Probe], speed: float) -> list[tuple]:
     return [push(sock, p.pose, speed) for p in chunk]
 
 
@@ -435,7 +458,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
     )
+    parser.add_argument(
+        "--robot",
+        choices=("free", "panda"),
+        default="free",
+        help="what holds the part (panda: probes judged at the part's true pose at the reset)",
+    )
     args = parser.parse_args(argv)
+    if args.robot == "panda" and args.physics_version != 2:
+        parser.error("--robot panda steps the -v2 physics only; add --physics-version 2")
+    if args.robot == "panda" and args.diagnose:
+        parser.error("--diagnose reads the free body's servos; allowed: --robot free")
     if args.quick:
         args.probes, args.directions, args.no_slow = min(args.probes, 24), 32, True
     if args.band is None:
@@ -447,14 +480,15 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"physics vs geometry: {args.probes} probes per socket, seed {args.seed}, "
         f"{args.workers} workers, band ±{args.band:g} µm, offsets ±{args.band_max:g} µm, "
-        f"round holes {specs_module.CIRCLE_HOLE_SIDES}-gons, physics -v{args.physics_version}; "
+        f"round holes {specs_module.CIRCLE_HOLE_SIDES}-gons, physics -v{args.physics_version}, "
+        f"robot {args.robot}; "
         f"Python "
         f"{platform.python_version()}, MuJoCo {mujoco.__version__}, NumPy {np.__version__}, "
         f"{os.cpu_count()} CPUs"
     )
     pool_of = sockets(args.seed) if args.grade is None else graded_sockets(args.grade)
     selected = [
-        dataclasses.replace(s, physics_version=args.physics_version)
+        dataclasses.replace(s, physics_version=args.physics_version, robot=args.robot)
         for s in pool_of
         if not args.only or s.name in args.only
     ]
@@ -468,7 +502,10 @@ def main(argv: list[str] | None = None) -> int:
             for speed in speeds:
                 t1 = time.perf_counter()
                 results = run_physics(pool, sock, probes, speed)
-                s = summarise(probes, results, args.band)
+                judged = probes
+                if sock.robot != "free":
+                    judged = at_true_poses(sock, probes, results, args.seed, args.directions)
+                s = summarise(judged, results, args.band)
                 name = f"{speed:g} mm/s"
                 rows.append((sock.name, name, s))
                 ok = not s["agree_rate"] < GOAL

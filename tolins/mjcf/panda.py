@@ -51,13 +51,13 @@ HANDLE_MASS = 0.05
 BASE = (-450.0, 0.0, -60.0)
 #: Friction of the finger pads on the handle (tangential; torsional and rolling in mm).
 GRIP_FRICTION = (1.0, 0.005, 0.0001)
+#: Half sizes (mm) of the flat pad on each finger's inner face (along the pads, across
+#: them, along the finger); the inner face is the finger's centre line, so the pads meet
+#: the handle with the fingers :data:`HANDLE`\ [1] open.
+PAD = np.array([9.0, 1.0, 9.0])
 #: The wrist's force/torque sensors at the flange (model units, the flange's frame): what
 #: the link holds of the hand, the fingers and the part (a real wrist sensor's reading).
 WRIST_FORCE, WRIST_TORQUE = "wrist_force", "wrist_torque"
-#: The weld that holds the part in the hand while the fingers close.
-HOLD = "hold"
-#: The body the weld holds the part to (the flange's link).
-HAND_BODY = PREFIX + "panda0_link7"
 #: The arm's motors, joint 1 to 7, in a world of :func:`panda_world`.
 ARM_MOTORS = tuple(f"{PREFIX}panda0_joint{i}" for i in range(1, 8))
 #: The finger motors (closing: negative force).
@@ -210,12 +210,40 @@ def handle_centre_height() -> float:
     return PIN_LENGTH + CARRIER_THICKNESS + float(HANDLE[2])
 
 
+def add_pad(arm: mujoco.MjSpec, finger: mujoco.MjsBody) -> mujoco.MjsGeom:
+    """A flat pad (:data:`PAD` half sizes, mm) on ``finger``'s inner face, centred at the
+    grip site's height: what touches the handle, with the task's stiff contacts and no
+    margin. The files' fingers collide through stacked capsules that are rounded, tapered
+    and active 1 mm before touching: they held the handle by its bottom edge and pushed
+    the part up and along the pads after a reset."""
+    site = arm.site(GRIP_SITE)
+    rotation = np.zeros(9)
+    mujoco.mju_quat2Mat(rotation, np.asarray(finger.quat, dtype=float))
+    height = (rotation.reshape(3, 3).T @ (np.asarray(site.pos) - finger.pos))[2]
+    side = float(np.sign(finger.joints[0].axis[1]))  # the finger opens towards +y or -y
+    return finger.add_geom(
+        name=f"{finger.name}_pad",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=PAD,
+        pos=[0.0, side * PAD[1], height],
+        contype=1,
+        conaffinity=2,
+        condim=3,
+        margin=0.0,
+        gap=0.0,
+        friction=GRIP_FRICTION,
+        solref=_SOLREF,
+        solimp=_SOLIMP,
+        group=3,
+    )
+
+
 def panda_world(
     socket: SocketSpec, base: tuple[float, float, float] = BASE, *, board_body: bool = True
 ) -> mujoco.MjSpec:
     """``socket``'s board and workpiece with the Panda holding the part: the workpiece on a
-    free joint (its servos gone) with a handle on its carrier, gravity on, the weld
-    :data:`HOLD` (inactive until set) from the part to the hand, and the arm at ``base``.
+    free joint (its servos gone) with a handle on its carrier, gravity on, and the arm at
+    ``base``.
     The arm's links collide with nothing of the task; the fingers with the part only (the
     board cannot be reached by them with a part in the hand). The sensors
     :data:`WRIST_FORCE` and :data:`WRIST_TORQUE` sit at the flange, beside the model's own
@@ -238,14 +266,6 @@ def panda_world(
         friction=GRIP_FRICTION,
     )
     workpiece.mass += HANDLE_MASS  # the body's explicit inertial: geoms add no mass to it
-    world.add_equality(
-        type=mujoco.mjtEq.mjEQ_WELD,
-        name=HOLD,
-        name1="workpiece",
-        name2=HAND_BODY,
-        objtype=mujoco.mjtObj.mjOBJ_BODY,
-        active=False,
-    )
     world.option.gravity = GRAVITY
     arm = panda_spec()
     arm.option.timestep = world.option.timestep
@@ -253,10 +273,9 @@ def panda_world(
         actuator.userdata = []
     arm.nuser_actuator = -1
     for geom in arm.geoms:
-        finger = geom.parent.name.endswith("finger")
-        geom.contype, geom.conaffinity = (1, 2) if finger else (0, 0)
-        if finger:  # the task's stiff contacts: the files' soft pads let the part creep
-            geom.friction, geom.solref, geom.solimp = GRIP_FRICTION, _SOLREF, _SOLIMP
+        geom.contype, geom.conaffinity = 0, 0
+    for finger in (arm.body("panda0_leftfinger"), arm.body("panda0_rightfinger")):
+        add_pad(arm, finger)
     world.attach(arm, prefix=PREFIX, frame=world.worldbody.add_frame(pos=base))
     # The real gripper's fingers move as one (a rack on one motor): coupled, the part sits
     # midway between them instead of wherever the two fingers' pushes happen to balance.

@@ -13,8 +13,8 @@ servos do), ``v*`` the commanded twist, ``Λ = (J M⁻¹ Jᵀ)⁻¹`` the task-s
 (a posture ``q₀`` held there), ``b`` gravity and Coriolis (MuJoCo's ``qfrc_bias``) and
 ``m g`` the weight of the part held at the grip site (``payload``, as a real Franka is
 told its load); τ is clipped to the Franka's torque limits.
-:func:`place_grasp` puts the hand around the part's handle at a pose and welds the part
-to it while the fingers close. What a robot knows of the part: :func:`nominal_pose` (the
+:func:`place_grasp` puts the hand around the part's handle at a pose and
+:func:`close_fingers` closes them on it. What a robot knows of the part: :func:`nominal_pose` (the
 grip site's forward kinematics and the nominal grasp) and :func:`wrist_wrench` (the wrist
 sensor with the weight of the hand and the part removed).
 """
@@ -22,6 +22,7 @@ sensor with the weight of the hand and the part removed).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -38,9 +39,7 @@ from tolins.mjcf.panda import (
     GRAVITY,
     GRIP_SITE,
     HAND,
-    HAND_BODY,
     HANDLE,
-    HOLD,
     PREFIX,
     WRIST_FORCE,
     WRIST_TORQUE,
@@ -230,11 +229,10 @@ def place_grasp(
     offset: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reset ``data`` with the hand around the handle of a part at ``pose`` ``[x, y, theta,
-    z]`` (tips' height z; fingers 1 mm off each side) and the weld :data:`HOLD` on, holding
-    the part where it is in the hand. With ``offset`` ``[dx, dy, dyaw]`` (mm, rad, in the
-    grip frame) the part sits that far off in the hand: at ``pose`` moved by the offset,
-    where the robot believes it at ``pose``. Returns the grip site's target position,
-    rotation and the posture (the IK's joint angles)."""
+    z]`` (tips' height z; fingers 1 mm off each side), the fingers open. With ``offset``
+    ``[dx, dy, dyaw]`` (mm, rad, in the grip frame) the part sits that far off in the hand:
+    at ``pose`` moved by the offset, where the robot believes it at ``pose``. Returns the
+    grip site's target position, rotation and the posture (the IK's joint angles)."""
     mujoco.mj_resetData(model, data)
     x, y, theta, z = (float(v) for v in pose)
     dx, dy, dyaw = (0.0, 0.0, 0.0) if offset is None else (float(v) for v in offset)
@@ -248,17 +246,36 @@ def place_grasp(
     posture = arm.solve_ik(data, target, rot)
     data.qpos[arm.fingers] = HANDLE[1] + 1.0
     mujoco.mj_forward(model, data)
-    hold, hand = model.equality(HOLD).id, model.body(HAND_BODY).id
-    body = model.body("workpiece").id
-    frame = data.xmat[hand].reshape(3, 3)
-    inverse, relative = np.zeros(4), np.zeros(4)
-    mujoco.mju_negQuat(inverse, data.xquat[hand])
-    mujoco.mju_mulQuat(relative, inverse, data.xquat[body])
-    model.eq_data[hold, 3:6] = frame.T @ (data.xpos[body] - data.xpos[hand])
-    model.eq_data[hold, 6:10] = relative
-    model.eq_data[hold, 10] = 1.0  # torquescale: the orientation held as the position
-    data.eq_active[hold] = True
     return target, rot, posture
+
+
+def close_fingers(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    arm: Arm,
+    force: float,
+    seconds: float,
+    every: int,
+    law: Callable[[], None],
+) -> None:
+    """Close the fingers on the part with ``force`` (N) each for ``seconds``, ``law()``
+    setting the arm's torques before every ``every`` physics steps, with gravity off: the
+    part floats where :func:`place_grasp` put it until the pads hold it, so the grasp
+    starts where the robot believes it (a part held by a soft constraint instead is
+    pushed tens of µm off by the closing fingers and keeps the offset). Gravity, in
+    ``model``, is back on when it returns; ``law`` must not compensate the part's weight
+    meanwhile."""
+    gravity = model.opt.gravity.copy()
+    model.opt.gravity[:] = 0.0
+    try:
+        data.ctrl[arm.finger_motors] = -force / FORCE_SCALE
+        steps = round(seconds / model.opt.timestep)
+        for start in range(0, steps, every):
+            law()
+            mujoco.mj_step(model, data, nstep=min(every, steps - start))
+    finally:
+        model.opt.gravity[:] = gravity
+    mujoco.mj_forward(model, data)
 
 
 def nominal_pose(data: mujoco.MjData, arm: Arm) -> np.ndarray:

@@ -16,9 +16,9 @@ servos, the arm is compliant: it does not stop at the first contact but presses 
 the law's force balances the board's, and it lags its target while it moves
 (``benchmarks/panda_validation.py`` measures both).
 
-A reset puts the hand around the handle where the part is meant to be (IK), welds the part
-to the hand while the fingers close for :data:`SETTLE` s, then releases the weld: from
-there friction alone holds it. A grasp error (``set_grasp``) puts the part off in the hand
+A reset puts the hand around the handle where the part is meant to be (IK) and closes the
+fingers on it for :data:`SETTLE` s with gravity off (:func:`~tolins.physics.arm.close_fingers`):
+from there friction alone holds it. A grasp error (``set_grasp``) puts the part off in the hand
 by ``[dx, dy, dyaw]`` (mm, rad, in the grip frame) where the robot believes it nominal.
 
 What a simulation reports (:class:`~tolins.physics.protocol.BatchState`): the part's true
@@ -45,9 +45,17 @@ from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE
 from tolins.mjcf.layout import touch_addresses
 from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
-from tolins.mjcf.panda import GRAVITY, HOLD, panda_world
+from tolins.mjcf.panda import GRAVITY, panda_world
 from tolins.paper import A_MAX
-from tolins.physics.arm import Arm, Gains, grip_rotation, nominal_pose, place_grasp, wrist_wrench
+from tolins.physics.arm import (
+    Arm,
+    Gains,
+    close_fingers,
+    grip_rotation,
+    nominal_pose,
+    place_grasp,
+    wrist_wrench,
+)
 from tolins.physics.compiled import SocketCache
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
@@ -61,8 +69,8 @@ _ONE = np.zeros(1, dtype=np.intp)
 LAW_RATE = 500
 #: The closing force of each finger (N).
 GRIP_FORCE = 20.0
-#: Seconds the weld holds the part while the fingers close at a reset.
-SETTLE = 0.6
+#: Seconds the fingers close on the weightless part at a reset (they hold it after 0.1 s).
+SETTLE = 0.3
 #: How far (mm, on any of x, y, z) the part may be from where the robot believes it before
 #: a step reports it lost from the hand (a fault: the episode ends).
 DROPPED = 3.0
@@ -153,27 +161,29 @@ class PandaSimulations:
         workpiece = model.body("workpiece").id
         self._held_mass = float(model.body_subtreemass[workpiece])
         self._part = int(model.joint("workpiece").qposadr[0])
-        self._hold = model.equality(HOLD).id
         self._lag = A_MAX[[0, 1, 3]] * control_dt
         self._turn_lag = float(A_MAX[2]) * control_dt
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
-        """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error), let the
-        fingers close with the weld on, release the weld: the state then. One simulation
-        after another: the weld's hold is set in the model, which simulations may share."""
-        settle = round(SETTLE / self.arm.model.opt.timestep)
+        """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error) and close
+        the fingers on it: the state then. One simulation after another: the fingers close
+        with gravity off in the model, which simulations may share."""
         still = np.zeros((1, 6))
         for k, i in enumerate(ids.tolist()):
             model, data = self.models[i], self.datas[i]
             target, rot, posture = place_grasp(model, data, self.arm, poses[k], self.grasp[i])
             self.target[i], self.posture[i] = target, posture
             self.yaw[i] = math.atan2(rot[1, 0], rot[0, 0])
-            data.ctrl[self.arm.finger_motors] = -GRIP_FORCE / FORCE_SCALE
-            for start in range(0, settle, self.every):
-                self._update_law(ids[k : k + 1], still)
-                mujoco.mj_step(model, data, nstep=min(self.every, settle - start))
-            data.eq_active[self._hold] = False
-            mujoco.mj_forward(model, data)
+            one = ids[k : k + 1]
+            close_fingers(
+                model,
+                data,
+                self.arm,
+                GRIP_FORCE,
+                SETTLE,
+                self.every,
+                lambda one=one: self._update_law(one, still, payload=0.0),
+            )
         return self.state(ids, self.summed_touch(ids), None)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
@@ -221,10 +231,11 @@ class PandaSimulations:
             turn = math.remainder(self.yaw[i] - yaw, math.tau)
             self.yaw[i] = yaw + min(max(turn, -self._turn_lag), self._turn_lag)
 
-    def _update_law(self, ids: np.ndarray, twist: np.ndarray) -> None:
+    def _update_law(self, ids: np.ndarray, twist: np.ndarray, payload: float | None = None) -> None:
         """The law's torques for simulations ``ids``, each computed as a batch of one: the
         stacked numpy pass rounds differently with the batch's size, and a simulation of
-        the vector env must step as the single env's does."""
+        the vector env must step as the single env's does. ``payload``: the mass (kg) it
+        compensates at the grip site (default: the part's)."""
         for k, i in enumerate(ids.tolist()):
             data = self.datas[i]
             (torques,) = self.arm.batch_torques(
@@ -233,7 +244,7 @@ class PandaSimulations:
                 grip_rotation(self.yaw[i])[None],
                 twist[k : k + 1],
                 self.posture[i : i + 1],
-                payload=self._held_mass,
+                payload=self._held_mass if payload is None else payload,
                 gains=self.gains[i],
             )
             data.ctrl[self.arm.motors] = torques

@@ -57,31 +57,28 @@ CASES = [
 ]
 
 
-def inserts(
-    env: InsertionEnv, axis: int, offset: float, speed: float
-) -> tuple[bool, tuple[float, float]]:
+def inserts(env: InsertionEnv, axis: int, offset: float, speed: float) -> tuple[bool, float]:
     """Whether a push down at ``speed`` from ``offset`` on ``axis`` inserts, and the
-    part's true offset on ``axis`` at the reset and after the first control step."""
+    part's true offset on ``axis`` at the reset."""
     pose = np.array([0.0, 0.0, 0.0, 0.05])
     pose[axis] = offset
     _, info = env.reset(options={"pose": pose})
-    true = [float(info["pose"][axis])]
+    start = float(info["pose"][axis])
     for _ in range(STEPS[speed]):
         *_, terminated, truncated, info = env.step([0.0, 0.0, 0.0, -speed])
-        true = [*true, float(info["pose"][axis])][:2]
         if info["success"]:
-            return True, tuple(true)
+            return True, start
         if terminated or truncated:
             break
-    return False, tuple(true)
+    return False, start
 
 
 def largest_inserting(
     case: Case, speed: float, resolution: float, physics_version: int = 1, robot: str = "free"
-) -> tuple[float, tuple[float, float]]:
+) -> tuple[float, float]:
     """Bisection between ``case.inside`` and ``case.outside`` (0 and 1.5 × that for the
     Panda, whose grasp moves the part): the largest offset asked of the reset that
-    inserts, and the part's true offsets then (:func:`inserts`); ``ValueError`` if they do
+    inserts, and the part's true offset then (:func:`inserts`); ``ValueError`` if they do
     not bracket the change."""
     env = InsertionEnv(
         case.socket, measurement_noise=0, physics_version=physics_version, robot=robot
@@ -117,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     ServoStepper.lazy_sensors = not args.eager_sensors
     start = time.perf_counter()
     panda = args.robot == "panda"
-    extra = " true offset at the reset → after one step, fast; slow | its capture fast; slow |"
+    extra = " true offset at the reset fast / slow | its capture fast / slow |"
     print("| case | 2.5 mm/s | 0.5 mm/s | capture fast / slow (µm or mrad) |" + extra * panda)
     print("|---|---|---|---|" + "---|---|" * panda)
     for case in CASES:
@@ -130,11 +127,9 @@ def main(argv: list[str] | None = None) -> int:
             f"{(fast - case.limit) * 1e3:+.1f} / {(slow - case.limit) * 1e3:+.1f} |"
         )
         if panda:
-            (a, b), (c, d) = true_fast, true_slow
-            over = [(v - case.limit) * 1e3 for v in (a, b, c, d)]
             row += (
-                f" {a:.5f} → {b:.5f}; {c:.5f} → {d:.5f} | {over[0]:+.1f} → {over[1]:+.1f}; "
-                f"{over[2]:+.1f} → {over[3]:+.1f} |"
+                f" {true_fast:.5f} / {true_slow:.5f} | {(true_fast - case.limit) * 1e3:+.1f} / "
+                f"{(true_slow - case.limit) * 1e3:+.1f} |"
             )
         print(row)
     print(f"total {time.perf_counter() - start:.0f} s")

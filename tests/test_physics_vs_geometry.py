@@ -46,10 +46,27 @@ def test_physics_agrees_with_contains_30_um_from_the_boundary(bench, name, spec)
     assert {p.inside for p in clear} == {True, False}
     with concurrent.futures.ThreadPoolExecutor(2) as pool:
         results = bench.run_physics(pool, sock, clear, bench.FAST)
-    for probe, (outcome, z, _) in zip(clear, results, strict=True):
+    for probe, (outcome, z, *_) in zip(clear, results, strict=True):
         assert (outcome == "in") == probe.inside, (probe, outcome, z)
         if not probe.inside:
             assert outcome == "surface" and z > -1e-3, (probe, z)
+
+
+def test_the_panda_starts_where_asked_and_agrees_with_contains_beyond_its_capture(bench) -> None:
+    pytest.importorskip("gymnasium_robotics")
+    spec = CircularSocket(2, 2)
+    sock = bench.Socket("2*2", "circle", spec, physics_version=2, robot="panda")
+    probes = bench.make_probes(sock, 8, 7, 50.0, 32, offsets_um=np.tile([60.0, -60.0], 4))
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        results = bench.run_physics(pool, sock, probes, bench.FAST)
+    judged = bench.at_true_poses(sock, probes, results, 7, 32)
+    for probe, true, (outcome, z, *_) in zip(probes, judged, results, strict=True):
+        # The grasp puts the part where the reset asked (measured: within 1.8 µm).
+        assert np.max(np.abs(true.pose - probe.pose)) < 5e-3, (probe.pose, true.pose)
+        # The arm's compliance captures up to about 30 µm beyond the geometry's boundary
+        # (benchmarks/README.md); 60 µm from it, physics and geometry agree.
+        assert abs(true.distance_um) > 40.0
+        assert (outcome == "in") == true.inside, (true, outcome, z)
 
 
 def test_results_do_not_depend_on_the_worker_count(bench) -> None:
@@ -75,5 +92,5 @@ def test_graded_sockets_agree_15_percent_of_the_clearance_from_the_boundary(benc
         assert len(clear) >= 6 and {p.inside for p in clear} == {True, False}
         with concurrent.futures.ThreadPoolExecutor(2) as pool:
             results = bench.run_physics(pool, sock, clear, bench.FAST)
-        for probe, (outcome, z, _) in zip(clear, results, strict=True):
+        for probe, (outcome, z, *_) in zip(clear, results, strict=True):
             assert (outcome == "in") == probe.inside, (sock.name, probe, outcome, z)

@@ -174,7 +174,9 @@ class InsertionEnv(gym.Env, SettingsAttributes):
       poses. The kinematic backend is the same in both.
     * v2, after tolins 0.6.0: ``robot="panda"`` and its ids ``tolins/{name}Panda-v2`` (a
       Franka Panda holds the part); ``robot="free"``, the default, is unchanged bit for
-      bit.
+      bit. Later in 0.6.0 the Panda's fingers got flat pads and close on a weightless
+      part (a soft weld and the model files' rounded finger capsules had left the grasp
+      tens of µm off where the robot believes it).
     * v1 (tolins 0.3.0): success requires every pin inside its own hole (not only
       ``z ≤ -success_depth``); the workpiece's joints keep every pin over the board and
       the carrier collides with the board's top; reset poses and goals are validated;

@@ -76,14 +76,16 @@ def main() -> None:
         rows = run(args.episodes, args.std, inference)
         mean = {key: np.mean([r[key] for r in rows]) for key in rows[0]}
         planned = [r for r in rows if r["replanned"]]
-        offset = np.mean([r["offset"] for r in planned]) if planned else float("nan")
-        residual = np.mean([r["residual"] for r in planned]) if planned else float("nan")
+        offset, residual = (
+            f"{np.mean([r[key] for r in planned]):.3f}" if planned else "–"
+            for key in ("offset", "residual")
+        )
         name = "safe expert + inference" if inference else "safe expert, lift and retry"
         plans = sum(r["plans"] for r in rows)
         kept = f"{sum(r['discarded'] for r in rows):.0f} of {plans:.0f}" if plans else "–"
         print(
             f"| {name} | {mean['success']:.2f} | {mean['attempts']:.2f} | {len(planned)} "
-            f"| {offset:.3f} | {residual:.3f} | {kept} |",
+            f"| {offset} | {residual} | {kept} |",
             flush=True,
         )
 

@@ -11,7 +11,7 @@ from stable_baselines3.common.env_checker import check_env
 
 import tolins
 from tolins.bench.pipeline.profiles import BASELINE_ENVS, PROFILES
-from tolins.bench.table.baselines import env_step_curves
+from tolins.bench.table.baselines import env_step_curves, summarise_curves
 from tolins.bench.table.claims import CLAIMS
 from tolins.bench.table.rows import BASELINE_ROWS, ROW_IDS, SB3_METHODS, select_rows
 from tolins.envs.wrappers import agent_env
@@ -125,6 +125,18 @@ def test_a_short_run_writes_a_model_the_bench_can_evaluate_and_its_curve(
     assert list(curves) == [stage]
     steps = curves[stage]["env_steps"]
     assert np.array_equal(steps, [h["env_steps"] for h in history])
+
+
+def test_curve_summaries_list_seeds_in_numeric_order() -> None:
+    def curve(first_success_at: float) -> dict[str, np.ndarray]:
+        steps = np.array([100.0, 200.0, 300.0])
+        return {"env_steps": steps, "reward": np.zeros(3), "success": (steps >= first_success_at)}
+
+    seeds = (10, 2, 0)
+    curves = {f"sac_circle_dense-seed{s}": curve(100.0 * (s + 1)) for s in seeds}
+    (summary,) = summarise_curves(curves)
+    # seed0 leaves zero at 100, seed2 at 300, seed10 never: listed 0, 2, 10
+    assert summary.first_success == (100.0, 300.0, None)
 
 
 def _dense_return(model, episodes: int = 5) -> float:

@@ -30,7 +30,7 @@ from tolins.bench.table.robustness import (
     SeedEpisodes,
     robustness_table,
 )
-from tolins.bench.table.rows import CIRCLE_2X2
+from tolins.bench.table.rows import CIRCLE_2X2, seeded
 from tolins.envs.tasks import DEFECT_SIGMA
 
 #: The file of a stage: condition id -> its episodes.
@@ -62,7 +62,7 @@ class RobustnessSpec:
 
 
 def stage_name(policy: RobustPolicy, seed: int, table: ConditionTable = ROBUSTNESS) -> str:
-    return f"{table.prefix}{policy.id}-seed{seed}"
+    return seeded(f"{table.prefix}{policy.id}", seed)
 
 
 def robustness_stage(spec: RobustnessSpec) -> Stage[RobustnessSpec]:

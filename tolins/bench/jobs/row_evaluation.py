@@ -14,7 +14,7 @@ from tolins.atomic import atomic_json
 from tolins.bench.jobs.policy_episodes import episodes_to_json, evaluate
 from tolins.bench.store.cache import Stage, StageCache
 from tolins.bench.store.integrity import checked_episodes, read_json
-from tolins.bench.table.rows import Row
+from tolins.bench.table.rows import Row, seeded
 from tolins.learning.agents.actors import PolicyRef
 from tolins.rollouts.episodes import Episode
 
@@ -48,7 +48,7 @@ class EvaluationSpec:
 
 def stage_name(row: Row, seed: int) -> str:
     """The stage name of ``row``'s evaluation for training seed ``seed``."""
-    return f"eval-{row.id}-seed{seed}"
+    return seeded(f"eval-{row.id}", seed)
 
 
 def evaluation_stage(spec: EvaluationSpec) -> Stage[EvaluationSpec]:

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from tolins.bench.jobs.demonstrations import DemoSpec, dataset_folder
 from tolins.bench.store.cache import Stage, StageCache, stage_key
-from tolins.bench.table.rows import SB3_METHODS, Training
+from tolins.bench.table.rows import SB3_METHODS, Training, seeded
 
 if TYPE_CHECKING:
     from tolins.learning.agents.sb3_config import Sb3Config
@@ -57,7 +57,7 @@ class TrainingSpec:
 
 def stage_name(name: str, seed: int) -> str:
     """The stage name of training ``name`` with ``seed``, e.g. ``pi_n_safe-seed0``."""
-    return f"{name}-seed{seed}"
+    return seeded(name, seed)
 
 
 def policy_file(training: Training) -> str:

@@ -19,13 +19,13 @@ import numpy as np
 from tolins.atomic import atomic_json
 from tolins.bench.store.cache import Stage, StageCache
 from tolins.bench.store.integrity import StageFileError, read_array, read_json
-from tolins.bench.table.rows import TRAININGS
+from tolins.bench.table.rows import TRAININGS, seeded
 from tolins.bench.table.seeds import FIRST_SEED
 
 #: The training whose iterations are drawn, with its training seed.
 TRAINING, SEED = "pi_n_safe", 0
 #: The stage's name.
-NAME = f"trajectories-{TRAINING}-seed{SEED}"
+NAME = seeded(f"trajectories-{TRAINING}", SEED)
 #: The file of the stage.
 TRAJECTORIES = "trajectories.json"
 #: Iterations of π_n drawn (at most; the expert's episode besides).

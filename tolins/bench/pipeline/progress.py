@@ -34,7 +34,7 @@ from tolins.bench.pipeline import settings
 from tolins.bench.pipeline.profiles import Profile
 from tolins.bench.table.robot import ROBOT
 from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable
-from tolins.bench.table.rows import ALL_ROWS, SB3_METHODS, TRAININGS
+from tolins.bench.table.rows import ALL_ROWS, SB3_METHODS, TRAININGS, unseeded
 from tolins.paper import HORIZON
 
 #: The kinds of stages, in the order a run meets them.
@@ -88,14 +88,9 @@ def expected_cost(name: str, profile: Profile, backend: str) -> float:
     return fixed + steps * STEP_SECONDS.get(per_step, 0.0)
 
 
-def _unseeded(name: str) -> str:
-    """The stage name ``name`` less its ``-seedN`` (``name`` itself without one)."""
-    return name.rpartition("-seed")[0] or name
-
-
 def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float, str]:
     """The budgeted work of the stage ``name`` of ``kind`` and its unit of cost."""
-    base = _unseeded(name)
+    base = unseeded(name)
     if kind == "demonstrations":
         return profile.demonstrations * HORIZON, "rollout"
     if kind == "study":
@@ -104,13 +99,13 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
     if kind == "evaluation" and name == TRAJECTORIES:
         return (TRAJECTORY_EPISODES + 1) * HORIZON, "rollout"
     if kind == "evaluation":
-        same = (row for row in ALL_ROWS if _unseeded(row_evaluation.stage_name(row, 0)) == base)
+        same = (row for row in ALL_ROWS if unseeded(row_evaluation.stage_name(row, 0)) == base)
         row = next(same, None)
         factor = INFERENCE_FACTOR if row is not None and row.inference else 1.0
         return profile.eval_episodes * HORIZON * factor, "rollout"
     if kind in ("robustness", "robot"):
         table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
-        named = (p for p in table.policies if _unseeded(robustness.stage_name(p, 0, table)) == base)
+        named = (p for p in table.policies if unseeded(robustness.stage_name(p, 0, table)) == base)
         policy = next(named, None)
         factor = INFERENCE_FACTOR if policy is not None and policy.inference else 1.0
         episodes = profile.robustness_episodes * len(table.conditions)

@@ -11,6 +11,7 @@ import numpy as np
 
 from tolins.atomic import atomic_write
 from tolins.bench.table.results import standard_error
+from tolins.bench.table.rows import unseeded
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.tolerance import NO_TOLERANCE, WINDOWS, image
 
@@ -186,7 +187,7 @@ def plot_env_step_curves(path: str | Path, curves: dict[str, dict[str, np.ndarra
     figure, axes = plt.subplots(1, 2, figsize=(12, 3.8), constrained_layout=True)
     colours: dict[str, str] = {}
     for stage, curve in curves.items():
-        training = stage.rsplit("-seed", 1)[0]
+        training = unseeded(stage)
         first = training not in colours
         colours.setdefault(training, f"C{len(colours) % 10}")
         # RS-GAIL solid, baselines on the sparse reward dotted, on the dense one dashed

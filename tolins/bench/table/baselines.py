@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from tolins.bench.table.rows import SB3_METHODS, TRAININGS
+from tolins.bench.table.rows import SB3_METHODS, TRAININGS, seed_order, unseeded
 
 #: Curve of one stage: ``env_steps``, ``reward``, ``success`` as arrays.
 Curve = dict[str, np.ndarray]
@@ -36,7 +36,7 @@ def env_step_curves(stage_folders: dict[str, Path]) -> dict[str, Curve]:
     folder), labelled by stage name, x axis in env steps."""
     curves = {}
     for stage, folder in stage_folders.items():
-        training = TRAININGS.get(stage.rsplit("-seed", 1)[0])
+        training = TRAININGS.get(unseeded(stage))
         path = Path(folder) / "curves.csv"
         if training is None or not path.is_file():
             continue
@@ -95,8 +95,9 @@ def summarise_curves(curves: Mapping[str, Curve]) -> list[CurveSummary]:
     """:class:`CurveSummary` of each training in ``curves`` (stage name → curve), in
     :data:`~tolins.bench.table.rows.TRAININGS` order."""
     by_training: dict[str, list[Curve]] = {}
-    for stage, curve in sorted(curves.items()):
-        by_training.setdefault(stage.rsplit("-seed", 1)[0], []).append(curve)
+    for stage in sorted(curves, key=seed_order):
+        curve = curves[stage]
+        by_training.setdefault(unseeded(stage), []).append(curve)
     return [
         CurveSummary(
             name,

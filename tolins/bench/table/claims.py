@@ -40,11 +40,11 @@ import numpy as np
 from tolins.bench.table.rows import PAPER, ROWS
 from tolins.bench.table.statistics import (
     EPISODES,
-    TRAINING_SPREAD,
     Interval,
     difference,
     equivalent,
     margin,
+    one_seed_spread,
     probability_of_improvement,
     seeds_to_decide,
     sign,
@@ -295,7 +295,7 @@ def _spread(x: np.ndarray, y: np.ndarray, over: str, paired: bool, trained: int)
     """The std of one training seed's difference: of the paired per-seed differences, of
     the two rows' per-seed means, or (one seed) the training noise it cannot show."""
     if over == EPISODES:
-        return TRAINING_SPREAD * math.sqrt(trained) if trained else None
+        return one_seed_spread(trained) if trained else None
     if paired:
         return float(np.std(x - y, ddof=1))
     return float(math.sqrt(np.var(x, ddof=1) + np.var(y, ddof=1)))

@@ -8,6 +8,23 @@ from dataclasses import dataclass
 PHYSICS_VERSION = 2
 
 
+def seeded(name: str, seed: int) -> str:
+    """A stage name: ``name`` for training seed ``seed``, e.g. ``pi_n_safe-seed0``."""
+    return f"{name}-seed{seed}"
+
+
+def unseeded(stage: str) -> str:
+    """The name a stage name was :func:`seeded` from (a name without a seed itself)."""
+    return stage.rpartition("-seed")[0] or stage
+
+
+def seed_order(stage: str) -> tuple[str, int]:
+    """A sort key of stage names: by :func:`unseeded` name, then by seed as a number
+    (``-seed2`` before ``-seed10``; a name without a seed first)."""
+    base, _, seed = stage.rpartition("-seed")
+    return (base, int(seed)) if base and seed.isdigit() else (stage, -1)
+
+
 def bench_id(name: str) -> str:
     """The id of the preset ``name`` in the bench's physics version."""
     return f"tolins/{name}-v{PHYSICS_VERSION}"

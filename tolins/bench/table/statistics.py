@@ -56,10 +56,17 @@ SEEDS, EPISODES = "seeds", "episodes"
 TRAINING_SPREAD = 3.36
 
 
+def one_seed_spread(trained: int) -> float:
+    """The std of one training seed's difference between two rows of which ``trained``
+    (0, 1 or 2) are trained: :data:`TRAINING_SPREAD` × √``trained`` reward, the training
+    noise an interval over one seed's episodes cannot show."""
+    return TRAINING_SPREAD * math.sqrt(trained)
+
+
 def one_seed_margin(trained: int) -> float:
     """The one-seed rule's margin for a pair with ``trained`` trained rows (0, 1 or 2):
-    2 × :data:`TRAINING_SPREAD` × √``trained`` reward, to one decimal."""
-    return round(2 * TRAINING_SPREAD * math.sqrt(trained), 1)
+    twice :func:`one_seed_spread`, to one decimal."""
+    return round(2 * one_seed_spread(trained), 1)
 
 
 #: An interval over episodes (one training seed) of two trained rows decides only beyond

@@ -25,7 +25,7 @@ class BenchConfig:
     """What ``tolins bench`` runs.
 
     Attributes:
-        profile: ``quick`` (default, ≤ 15 min on 2 cores), ``paper`` or ``tiny``.
+        profile: ``quick`` (default, about 8 min on 2 cores), ``paper`` or ``tiny``.
         rows: Row ids (comma-separated), ``None`` for all 15.
         backend: ``mujoco`` (contact physics) or ``kinematic`` (the paper's simulator).
         seeds: Training seeds; ``None``: the profile's.

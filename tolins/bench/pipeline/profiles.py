@@ -136,7 +136,7 @@ PROFILES: dict[str, Profile] = {
         recorded_episodes=3,
         robustness_episodes=20,
     ),
-    # About 15 min on 2 cores with three training seeds (the unit of the verdicts): a tenth
+    # About 8 min on 2 idle cores with three training seeds (the unit of the verdicts): a tenth
     # of the paper's per-seed budgets (10 RS-GAIL iterations for π_n, 8 for φ2), 50
     # evaluation episodes per row and seed; 6 episodes per robustness cell and seed (the
     # default; 50 cells, docs/benchmark.md). No deep-RL baselines: at RS-GAIL's quick

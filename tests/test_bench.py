@@ -329,3 +329,22 @@ def test_the_bench_parts_import_downwards_only():
         if BENCH_PARTS[part(found.target)] > BENCH_PARTS[part(found.importer)]
     ]
     assert not upward, "bench imports against its parts' order:\n" + "\n".join(upward)
+
+
+def test_a_bench_of_deep_rl_rows_only_reports_their_workpieces(tmp_path):
+    bench = run_bench(
+        BenchConfig(
+            profile="tiny",
+            backend="kinematic",
+            rows="R1.1",
+            out=str(tmp_path),
+            study=False,
+            robustness=False,
+            robot=False,
+        ),
+        progress=False,
+        log=lambda _: None,
+    )
+    assert list(bench.results) == ["R1.1"]
+    assert (tmp_path / "tolerance_images.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "| R1.1 |" in (tmp_path / "results.md").read_text()

@@ -11,7 +11,7 @@ from tolins.bench.jobs import trajectories
 from tolins.bench.reports import plots
 from tolins.bench.reports.force_plot import plot_row_profiles
 from tolins.bench.table.baselines import Curve, read_curves
-from tolins.bench.table.rows import PAPER, ROWS, TRAININGS
+from tolins.bench.table.rows import ALL_ROWS, PAPER, TRAININGS
 from tolins.envs.tasks import TASKS, task_of
 
 if TYPE_CHECKING:
@@ -32,7 +32,7 @@ def write_figures(run: BenchRun, out: Path, step_curves: dict[str, Curve]) -> li
     if fig_4a is not None:
         written.append(fig_4a)
     env_ids = []
-    for row in ROWS:
+    for row in ALL_ROWS:
         if row.id in results:
             env_ids += [*(t for tr in row.trainings for t in tr.env_ids), row.eval_env]
     written += plot_row_profiles({row: seeds[0] for row, seeds in run.episodes.items()}, out)

@@ -80,8 +80,10 @@ def test_table_has_the_papers_15_rows_and_their_trainings():
 
 def test_bad_rows_profiles_backends_and_seeds_are_refused():
     assert [r.id for r in select_rows("P2.2, C1.1")] == ["C1.1", "P2.2"]
-    with pytest.raises(ValueError, match=r"'C9\.9'.*allowed: C1\.1"):
+    with pytest.raises(ValueError, match=r"rows: 'C9\.9' is unknown; allowed: .* of C1\.1"):
         select_rows("C1.1,C9.9")
+    with pytest.raises(ValueError, match=r"rows: 'C1\.1' is named twice"):
+        select_rows(["C1.1", "C1.1"])
     with pytest.raises(ValueError, match="profile='fast'; allowed: paper, quick, tiny"):
         BenchConfig(profile="fast")
     with pytest.raises(ValueError, match="backend='bullet'; allowed: mujoco, kinematic"):
@@ -92,7 +94,7 @@ def test_bad_rows_profiles_backends_and_seeds_are_refused():
 
 def test_cli_reports_a_bad_row_and_exits_2(capsys, tmp_path):
     assert main(["bench", "--rows", "C7.1", "--out", str(tmp_path)]) == 2
-    assert "tolins bench: rows ['C7.1'] are unknown" in capsys.readouterr().err
+    assert "tolins bench: rows: 'C7.1' is unknown" in capsys.readouterr().err
     assert not (tmp_path / "stages").exists()
 
 

@@ -115,8 +115,8 @@ def test_resume_without_a_checkpoint_is_refused(tmp_path, capsys, no_training, m
 @pytest.mark.parametrize(
     ("methods", "why"),
     [
-        ("", "names no method"),
-        (",", "names no method"),
+        ("", "names nothing"),
+        (",", "names nothing"),
         ("inference,,random", "has an empty name"),
         ("inference,nope", "'nope' is unknown"),
         ("random,random", "'random' is named twice"),

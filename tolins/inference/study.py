@@ -38,6 +38,7 @@ from tolins.geometry.validation import check_seed
 from tolins.inference.goal import DISCARD_THRESHOLD, centre_goals, next_goal
 from tolins.inference.history import History
 from tolins.inference.posterior import DefectModel
+from tolins.names import comma_separated
 
 #: The study's socket: 2*1, pins 0.3 mm, holes 0.5 mm, 5 mm apart.
 SOCKET = CircularSocket(2, 1, pin_radius=0.3, hole_radius=0.5, row_pitch=5.0)
@@ -135,20 +136,8 @@ class StudyConfig:
 
 def parse_methods(text: str) -> tuple[str, ...]:
     """The methods named by ``tolins infer-study --methods TEXT``: comma-separated names
-    of :data:`METHODS` (spaces around a name ignored), each at most once, at least one.
-    Raises ``ValueError`` naming the option, what is wrong and the allowed names."""
-    names = tuple(name.strip() for name in text.split(","))
-    allowed = f"allowed: a comma-separated subset of {', '.join(METHODS)}"
-    if not any(names):
-        raise ValueError(f"--methods {text!r} names no method; {allowed}")
-    for name in names:
-        if not name:
-            raise ValueError(f"--methods {text!r} has an empty name; {allowed}")
-        if name not in METHODS:
-            raise ValueError(f"--methods: {name!r} is unknown; {allowed}")
-        if names.count(name) > 1:
-            raise ValueError(f"--methods: {name!r} is named twice; {allowed}")
-    return names
+    of :data:`METHODS`, each at most once, at least one (:func:`tolins.names.comma_separated`)."""
+    return comma_separated(text, METHODS, option="--methods")
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from tolins.names import comma_separated
+
 #: The physics version every row trains and is evaluated on (the ids' ``-v2``).
 PHYSICS_VERSION = 2
 
@@ -200,9 +202,7 @@ def select_rows(ids: str | list[str] | None, *, baselines: bool = True) -> list[
     baselines' if ``baselines``), in table order."""
     if ids is None:
         return list(ALL_ROWS if baselines else ROWS)
-    wanted = [i.strip() for i in ids.split(",")] if isinstance(ids, str) else list(ids)
-    unknown = [i for i in wanted if i not in ALL_ROW_IDS]
-    if unknown or not wanted:
-        allowed = ", ".join(ALL_ROW_IDS)
-        raise ValueError(f"rows {unknown or wanted!r} are unknown; allowed: {allowed}")
+    wanted = comma_separated(
+        ids if isinstance(ids, str) else ",".join(ids), ALL_ROW_IDS, option="rows"
+    )
     return [row for row in ALL_ROWS if row.id in wanted]

@@ -198,6 +198,11 @@ def test_cli_writes_a_recipe_and_refuses_to_overwrite_it(tmp_path, capsys):
     assert dataset.storage.metadata["tolins_env"] == "tolins/Circle2x2-v1"
     assert main(argv) == 2
     assert "exists; allowed: a new --name" in capsys.readouterr().err
+    argv[2] = "tolins/Circle2x2-v2"  # another physics version: its own default place
+    assert main(argv) == 0
+    assert (
+        f"wrote {tmp_path / 'tolins' / 'circle2x2-v2' / 'mixed-v0'}: 4" in capsys.readouterr().out
+    )
 
 
 def _train(argv, out):

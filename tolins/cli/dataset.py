@@ -50,7 +50,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--name",
         help="Minari dataset id (default: tolins/ENV/RECIPE-v0, e.g. "
-        "tolins/circle2x2/expert-safe-v0)",
+        "tolins/circle2x2/expert-safe-v0 for tolins/Circle2x2-v1 and "
+        "tolins/circle2x2-v2/expert-safe-v0 for -v2)",
     )
     parser.add_argument("--backend", default="mujoco", choices=BACKENDS, help="simulator")
     parser.add_argument(
@@ -63,8 +64,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def default_name(env_id: str, label: str) -> str:
-    """``tolins/circle2x2/expert-safe-v0`` for ``tolins/Circle2x2-v1`` and ``expert-safe``."""
-    env = env_id.removeprefix("tolins/").rsplit("-v", 1)[0].lower()
+    """``tolins/circle2x2/expert-safe-v0`` for ``tolins/Circle2x2-v1`` and ``expert-safe``;
+    ``tolins/circle2x2-v2/expert-safe-v0`` for ``tolins/Circle2x2-v2``: the env's physics
+    version beyond the first in its part of the id, so datasets of two versions do not
+    take the same place."""
+    env = env_id.removeprefix("tolins/").lower().removesuffix("-v1")
     slug = re.sub(r"[^a-z0-9]+", "-", label.lower()).strip("-") or "policy"
     return f"tolins/{env}/{slug}-v0"
 

@@ -3,6 +3,7 @@ threads, the one with the most work behind it first; results as by a plain loop.
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 
@@ -74,3 +75,39 @@ def test_a_failure_stops_the_run_and_is_raised() -> None:
     with pytest.raises(RuntimeError, match="bad failed"):
         LocalExecutor(2).run(jobs)
     assert "after" not in _LOG
+
+
+def _count(name: str, *deps: object) -> tuple[str, int, tuple]:
+    """A pure-Python loop (it holds the GIL), then where it ran and what it was given."""
+    total = sum(i * i for i in range(200_000))
+    assert total > 0
+    return name, os.getpid(), deps
+
+
+def test_own_process_jobs_run_in_processes_of_their_own_and_take_results() -> None:
+    jobs = [
+        Job("a", _count, ("a",), own_process=True),
+        Job("b", _count, ("b",), own_process=True),
+        Job("c", _count, ("c",), deps=("a",), own_process=True),
+        Job("d", _record, ("d",), deps=("c",)),  # a thread's job after a process's
+    ]
+    executor = LocalExecutor(2)
+    try:
+        results = executor.run(jobs)
+    finally:
+        executor.close()
+    pids = {results[n][1] for n in "abc"}
+    assert os.getpid() not in pids and len(pids) <= 2  # the executor's two processes
+    assert results["c"][2] == (results["a"],)
+    assert results["d"] == f"d<{results['c']}"
+    assert {executor.placement[n]["pid"] for n in "abc"} == pids
+    assert executor.placement["d"]["pid"] == os.getpid()
+
+
+def test_a_failure_in_an_own_process_job_is_raised() -> None:
+    executor = LocalExecutor(2)
+    try:
+        with pytest.raises(RuntimeError, match="bad failed"):
+            executor.run([Job("bad", _fail, ("bad",), own_process=True)])
+    finally:
+        executor.close()

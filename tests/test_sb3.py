@@ -186,3 +186,26 @@ def test_training_leaves_no_logger_folder_behind(tmp_path, monkeypatch) -> None:
     config = Sb3Config("sac", CIRCLE, backend="kinematic", env_steps=20, curve_every=20)
     train_sb3(config, tmp_path / "run", **{"learning_starts": 10})
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+def test_a_training_in_a_process_of_its_own_learns_what_it_learns_here(tmp_path) -> None:
+    """The bench's local executor trains SB3 stages in processes of their own (their
+    Python loop holds the GIL): the policy must be the one a training here gives."""
+    from stable_baselines3 import SAC
+
+    from tolins.bench.pipeline.executor import Job, LocalExecutor
+
+    config = Sb3Config(
+        "sac", CIRCLE, backend="kinematic", env_steps=300, curve_every=300, curve_episodes=1
+    )
+    train_sb3(config, tmp_path / "here")
+    executor = LocalExecutor(1)
+    try:
+        executor.run([Job("there", train_sb3, (config, tmp_path / "there"), own_process=True)])
+    finally:
+        executor.close()
+    here, there = (SAC.load(tmp_path / f / MODEL, device="cpu") for f in ("here", "there"))
+    weights = here.policy.state_dict()
+    assert len(weights) > 0
+    for name, value in there.policy.state_dict().items():
+        assert np.array_equal(value.numpy(), weights[name].numpy()), name

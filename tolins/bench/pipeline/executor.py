@@ -8,7 +8,9 @@ in where and when each job runs:
 
 - local: every job on a pool of ``workers`` threads as soon as its dependencies are done,
   the one with the costliest chain of work behind it first (:func:`critical_paths`), torch
-  on one thread; RS-GAIL's candidates on each training's own thread pool.
+  on one thread; RS-GAIL's candidates on each training's own thread pool. A job that holds
+  the GIL most of its time (``own_process``: SB3's Python loop) runs in a process of its
+  own, so that two of them do not take turns on one core.
 - Ray: every job as a task (1 CPU) as soon as its dependencies are done; torch on one
   thread in ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as
   locally: torch's results can depend on its thread count); RS-GAIL's candidates on one
@@ -23,13 +25,20 @@ atomically, the marker last (:mod:`tolins.bench.store.cache`).
 from __future__ import annotations
 
 import heapq
+import multiprocessing
 import os
 import re
 import socket
 import sys
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    wait,
+)
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -49,6 +58,9 @@ class Job:
         deps: Names of earlier jobs whose results are its last arguments.
         side_by_side: An evaluation: on Ray, its task runs torch on one thread (a
             training's on the driver's count); locally every job runs torch on one thread.
+        own_process: Its work holds the GIL most of the time (a Python loop of small
+            torch calls): locally it runs in a process of the executor's own (Ray's tasks
+            are processes anyway). Its arguments and result must pickle, as on Ray.
     """
 
     name: str
@@ -56,6 +68,7 @@ class Job:
     args: tuple[Any, ...] = ()
     deps: tuple[str, ...] = ()
     side_by_side: bool = False
+    own_process: bool = False
 
 
 Callback = Callable[[Job], None] | None
@@ -78,6 +91,17 @@ class LocalExecutor:
     def __init__(self, workers: int = 2) -> None:
         self.workers = workers
         self.placement: dict[str, dict[str, Any]] = {}
+        self._processes: ProcessPoolExecutor | None = None
+        self._processes_made = threading.Lock()
+
+    def _process_pool(self) -> ProcessPoolExecutor:
+        """The processes of ``own_process`` jobs (spawned on first use: forking a process
+        with threads running is unsafe), ``workers`` of them, kept until :meth:`close`."""
+        with self._processes_made:
+            if self._processes is None:
+                context = multiprocessing.get_context("spawn")
+                self._processes = ProcessPoolExecutor(self.workers, mp_context=context)
+            return self._processes
 
     def candidate_pool(self) -> None:
         """``None``: each RS-GAIL run makes its own thread pool."""
@@ -108,8 +132,12 @@ class LocalExecutor:
         def call(job: Job) -> Any:
             if on_start:
                 on_start(job)
-            value = job.fn(*job.args, *[results[d] for d in job.deps])
-            self.placement[job.name] = _where()
+            args = (*job.args, *[results[d] for d in job.deps])
+            if job.own_process:
+                value, where = self._process_pool().submit(_call_here, job.fn, args).result()
+            else:
+                value, where = job.fn(*args), _where()
+            self.placement[job.name] = where
             if on_done:
                 on_done(job, value)
             return value
@@ -137,7 +165,10 @@ class LocalExecutor:
         return {job.name: results[job.name] for job in jobs}
 
     def close(self) -> None:
-        """Nothing to release."""
+        """End the processes of ``own_process`` jobs, if any ran."""
+        if self._processes is not None:
+            self._processes.shutdown(cancel_futures=True)
+            self._processes = None
 
 
 def critical_paths(jobs: Sequence[Job], costs: Mapping[str, float]) -> dict[str, float]:
@@ -290,6 +321,14 @@ def _connect(ray: Any, address: str | None) -> None:
             f"address={address!r}: could not connect to a Ray cluster ({error}); start "
             "one with `ray start --head`"
         ) from None
+
+
+def _call_here(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, dict[str, Any]]:
+    """``fn(*args)`` with torch on one thread, and where it ran (an ``own_process`` job)."""
+    from tolins.learning.artefacts import single_threaded_torch
+
+    with single_threaded_torch():
+        return fn(*args), _where()
 
 
 def _where() -> dict[str, Any]:

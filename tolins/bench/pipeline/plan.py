@@ -64,6 +64,7 @@ class Plan:
         result: str | None = None,
         takes_upstream: bool = True,
         needs: tuple[str, ...] = (),
+        own_process: bool = False,
     ) -> None:
         """Plan ``stage``: finished (its ``result`` file, or folder) or a job of
         ``fn(root, stage, *args, upstream's result)`` (``upstream``: an earlier stage name,
@@ -87,7 +88,7 @@ class Plan:
         else:
             deps = (upstream,)
         deps += tuple(need for need in needs if need not in self.done)
-        self.jobs.append(Job(stage.name, fn, args, deps, side_by_side))
+        self.jobs.append(Job(stage.name, fn, args, deps, side_by_side, own_process))
 
 
 def plan_trainings(
@@ -125,6 +126,7 @@ def plan_trainings(
                     up,
                     result=training.policy_file(trained),
                     needs=tuple(demo.name for demo in stage.spec.demos),
+                    own_process=stage.spec.sb3 is not None,  # SB3's loop holds the GIL
                 )
                 if name in plan.cached:
                     log(f"{name}: cached ({plan.cache.wall_s(plan.folder(name)):.0f} s)")

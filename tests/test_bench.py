@@ -206,10 +206,11 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tmp_path):
     assert not (tmp_path / "inference.json").exists()  # not the kinematic run's study
 
 
-def _no_sections(out) -> BenchConfig:
-    """The tiny kinematic bench without the study and the robustness table."""
+def _no_sections(out, rows: str | None = None) -> BenchConfig:
+    """The tiny kinematic bench (of ``rows``, default all) without the study and the
+    robustness table."""
     return BenchConfig(
-        profile="tiny", backend="kinematic", out=str(out), study=False, robustness=False
+        profile="tiny", backend="kinematic", rows=rows, out=str(out), study=False, robustness=False
     )
 
 
@@ -334,19 +335,7 @@ def test_the_bench_parts_import_downwards_only():
 
 
 def test_a_bench_of_deep_rl_rows_only_reports_their_workpieces(tmp_path):
-    bench = run_bench(
-        BenchConfig(
-            profile="tiny",
-            backend="kinematic",
-            rows="R1.1",
-            out=str(tmp_path),
-            study=False,
-            robustness=False,
-            robot=False,
-        ),
-        progress=False,
-        log=lambda _: None,
-    )
+    bench = run_bench(_no_sections(tmp_path, rows="R1.1"), progress=False, log=lambda _: None)
     assert list(bench.results) == ["R1.1"]
     assert (tmp_path / "tolerance_images.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "| R1.1 |" in (tmp_path / "results.md").read_text()

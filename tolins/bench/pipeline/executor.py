@@ -77,7 +77,8 @@ DoneCallback = Callable[[Job, Any], None] | None
 
 class LocalExecutor:
     """Jobs on ``workers`` threads of this process, each as soon as its dependencies are done,
-    the ready job with the longest chain of work behind it first.
+    the ready job with the longest chain of work behind it first; an ``own_process`` job's
+    thread hands it to one of ``workers`` spawned processes and waits for it.
 
     ``costs`` (seconds, by job name; :func:`~tolins.bench.pipeline.progress.expected_cost`)
     order the ready jobs: a job's priority is its own cost plus that of the costliest chain

@@ -9,6 +9,7 @@ import gymnasium
 import numpy as np
 import pytest
 
+from tolins.bench.jobs import row_evaluation
 from tolins.bench.pipeline.config import BenchConfig
 from tolins.bench.pipeline.runner import run_bench
 from tolins.bench.store.cache import MARKER, StageCache, stage_key
@@ -96,6 +97,20 @@ def test_cli_reports_a_bad_row_and_exits_2(capsys, tmp_path):
     assert main(["bench", "--rows", "C7.1", "--out", str(tmp_path)]) == 2
     assert "tolins bench: rows: 'C7.1' is unknown" in capsys.readouterr().err
     assert not (tmp_path / "stages").exists()
+
+
+def test_a_stage_that_raises_is_its_traceback_and_exit_1_naming_it(capsys, tmp_path, monkeypatch):
+    def broken(*_args, **_kwargs):
+        raise ValueError("a bug inside the evaluation")
+
+    monkeypatch.setattr(row_evaluation, "evaluate_row", broken)
+    options = ["--profile", "tiny", "--rows", "C1.1", "--backend", "kinematic", "--no-study"]
+    options += ["--no-robustness", "--no-robot", "--out", str(tmp_path)]
+    assert main(["bench", *options]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" in err and "ValueError: a bug inside the evaluation" in err
+    assert "tolins bench: stage eval-C1.1-seed0 failed (ValueError" in err
+    assert not (tmp_path / "results.json").exists()
 
 
 # --- the stage cache -------------------------------------------------------------------

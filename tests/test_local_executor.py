@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from tolins.bench.pipeline.executor import Job, LocalExecutor, critical_paths
+from tolins.bench.pipeline.executor import Job, LocalExecutor, critical_paths, failed_stage
 
 _BARRIER = threading.Barrier(2, timeout=10)
 _LOG: list[str] = []
@@ -72,9 +72,11 @@ def test_a_failure_stops_the_run_and_is_raised() -> None:
         Job("bad", _fail, ("bad",)),
         Job("after", _record, ("after",), deps=("bad",)),
     ]
-    with pytest.raises(RuntimeError, match="bad failed"):
+    with pytest.raises(RuntimeError, match="bad failed") as raised:
         LocalExecutor(2).run(jobs)
     assert "after" not in _LOG
+    assert failed_stage(raised.value) == "bad"
+    assert "(raised by the bench's stage bad)" in raised.value.__notes__
 
 
 def _count(name: str, *deps: object) -> tuple[str, int, tuple]:

@@ -6,6 +6,7 @@ it started, which take their raylets, GCS and workers with them)."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -21,7 +22,8 @@ import pytest
 import ray
 
 from tolins.bench.pipeline.config import BenchConfig
-from tolins.bench.pipeline.executor import RayExecutor
+from tolins.bench.pipeline.executor import Job as Stage
+from tolins.bench.pipeline.executor import RayExecutor, failed_stage
 from tolins.bench.pipeline.runner import run_bench
 from tolins.cli import main
 from tolins.learning.imitation.bc import behaviour_clone
@@ -251,6 +253,27 @@ def test_an_address_without_a_ray_head_says_so(tmp_path, capsys):
     )
     assert "no Ray head answers there" in capsys.readouterr().err
     assert not (tmp_path / "stages").exists()
+
+
+def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray):
+    # Library functions: Ray imports them by name on its workers.
+    jobs = [Stage("slow", time.sleep, (2.5,)), Stage("after", print, ("after",), deps=("slow",))]
+    started, finished = {}, {}
+    RayExecutor().run(
+        jobs,
+        on_start=lambda job: started.setdefault(job.name, time.monotonic()),
+        on_done=lambda job, _: finished.setdefault(job.name, time.monotonic()),
+    )
+    assert set(started) == set(finished) == {"slow", "after"}
+    # "after" cannot begin before "slow" ends; the executor reads the starts once a second
+    assert started["after"] - started["slow"] > 1.0
+    assert all(started[name] <= finished[name] for name in started)
+
+
+def test_a_failed_task_is_raised_naming_its_stage(local_ray):
+    with pytest.raises(ValueError, match="math domain error") as raised:
+        RayExecutor().run([Stage("bad", math.sqrt, (-1.0,))], on_start=lambda _: None)
+    assert failed_stage(raised.value) == "bad"
 
 
 def test_an_address_while_ray_runs_in_this_process_is_refused(local_ray):

@@ -4,10 +4,12 @@ from :class:`~tolins.bench.pipeline.config.BenchConfig`."""
 from __future__ import annotations
 
 import argparse
+import sys
+import traceback
 from pathlib import Path
 
 from tolins.bench.pipeline.config import SEEDS_MAX, BenchConfig
-from tolins.bench.pipeline.executor import EXECUTORS
+from tolins.bench.pipeline.executor import EXECUTORS, failed_stage
 from tolins.bench.pipeline.profiles import PROFILES
 from tolins.cli import checks
 from tolins.cli.args import Option, add_config_arguments, config_from_args
@@ -44,7 +46,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every option, run the bench, and print its table and claims."""
+    """Check every option, run the bench, and print its table and claims. A bad option
+    or a damaged stage file is one line and exit status 2; a stage that raised is its
+    traceback and exit status 1."""
     try:
         out = checks.output_folder("--out", args.out or Path("results") / args.profile)
         config = config_from_args(BenchConfig, args, out=str(out))
@@ -56,7 +60,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         bench = run_bench(config)
     except (ValueError, FileNotFoundError) as error:
-        return checks.fail("tolins bench", error)
+        stage = failed_stage(error)
+        if stage is None:  # refused before any stage ran, or a stage's files are damaged
+            return checks.fail("tolins bench", error)
+        traceback.print_exception(error)
+        print(
+            f"tolins bench: stage {stage} failed ({type(error).__name__}, its traceback "
+            "above); the finished stages are kept: the same command resumes",
+            file=sys.stderr,
+        )
+        return 1
     print(format_results_table(bench.results))
     print("\nThe paper's claims in this run:")
     print(format_claims(bench.claims))

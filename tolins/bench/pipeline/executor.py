@@ -17,7 +17,9 @@ in where and when each job runs:
   :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
 
 Results are identical (tested): every stage's seeds are fixed by its config, not by
-where it runs. Stage folders need a filesystem every node shares (``DIR`` is checked on
+where it runs. A job that raises stops the run (the running ones end, no more start); its
+exception is raised with the stage's name attached (:func:`failed_stage`, and a note in
+its traceback). Stage folders need a filesystem every node shares (``DIR`` is checked on
 the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
 """
@@ -73,6 +75,18 @@ class Job:
 
 Callback = Callable[[Job], None] | None
 DoneCallback = Callable[[Job, Any], None] | None
+
+
+def failed_stage(error: BaseException) -> str | None:
+    """The name of the stage whose job raised ``error`` (``None``: not raised by a job)."""
+    return getattr(error, "tolins_stage", None)
+
+
+def _mark_failed(error: BaseException, name: str) -> BaseException:
+    """``error`` named as the failure of stage ``name`` (:func:`failed_stage`)."""
+    error.tolins_stage = name  # type: ignore[attr-defined]
+    error.add_note(f"(raised by the bench's stage {name})")
+    return error
 
 
 class LocalExecutor:
@@ -157,7 +171,7 @@ class LocalExecutor:
                         for other in running:  # let the running ones end, start no more
                             other.cancel()
                         wait(running)
-                        raise error
+                        raise _mark_failed(error, name)
                     results[name] = future.result()
                     for later in needed_by[name]:
                         waiting[later].discard(name)
@@ -252,27 +266,44 @@ class RayExecutor:
         on_done: DoneCallback = None,
         costs: Mapping[str, float] | None = None,
     ) -> dict[str, Any]:
-        """As :meth:`LocalExecutor.run`; Ray schedules the tasks (``costs`` unused)."""
+        """As :meth:`LocalExecutor.run`; Ray schedules the tasks (``costs`` unused).
+
+        ``on_start`` is called when a task begins on its worker (each task puts its name on
+        a :class:`ray.util.queue.Queue` first, which this loop reads once a second), not
+        when it is submitted."""
         ray = self._ray
         task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
+        started = _start_queue() if on_start else None
+        by_name = {job.name: job for job in jobs}
         values, where = {}, {}
         for job in jobs:
             threads = 1 if job.side_by_side else self.torch_threads
             deps = [values[d] for d in job.deps]
             options = {"name": job.name}
             values[job.name], where[job.name] = task.options(**options).remote(
-                job.fn, job.args, threads, self.shared, *deps
+                job.fn, job.args, threads, self.shared, (started, job.name), *deps
             )
-            if on_start:
-                on_start(job)
         by_ref = {where[job.name]: job for job in jobs}
         pending = list(by_ref)
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            job = by_ref[done[0]]
-            self.placement[job.name] = ray.get(done[0])
-            if on_done:
-                on_done(job, ray.get(values[job.name]))
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1, timeout=1.0)
+                if started is not None and on_start is not None:
+                    for name in started.get_nowait_batch(started.qsize()):
+                        on_start(by_name[name])
+                for ref in done:
+                    job = by_ref[ref]
+                    try:
+                        self.placement[job.name] = ray.get(ref)
+                        value = ray.get(values[job.name])
+                    except Exception as error:
+                        _mark_failed(error, job.name)
+                        raise
+                    if on_done:
+                        on_done(job, value)
+        finally:
+            if started is not None:
+                started.shutdown()
         return {job.name: ray.get(values[job.name]) for job in jobs}
 
     def close(self) -> None:
@@ -344,10 +375,26 @@ def _where() -> dict[str, Any]:
     }
 
 
+def _start_queue() -> Any:
+    """A queue on which Ray tasks put their names as they start (an actor holding no CPU)."""
+    from ray.util.queue import Queue
+
+    return Queue(actor_options={"num_cpus": 0})
+
+
 def _ray_task(
-    fn: Callable[..., Any], args: tuple, threads: int, shared: str | None, *deps: Any
+    fn: Callable[..., Any],
+    args: tuple,
+    threads: int,
+    shared: str | None,
+    start: tuple[Any, str],
+    *deps: Any,
 ) -> tuple[Any, dict[str, Any]]:
     import torch
+
+    started, name = start
+    if started is not None:
+        started.put(name)
 
     if shared is not None and not Path(shared).is_dir():
         raise FileNotFoundError(

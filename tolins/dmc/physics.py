@@ -10,8 +10,8 @@ import numpy as np
 from dm_control import mujoco as dm_mujoco
 
 from tolins.geometry.specs import SocketSpec
-from tolins.mjcf import make_mjcf
 from tolins.paper import CONTROL_DT
+from tolins.physics.compiled import compile_model
 from tolins.physics.panda import PandaStepper, compile_panda_world, split_draw
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
@@ -89,8 +89,7 @@ class InsertionPhysics(dm_mujoco.Physics):
     @classmethod
     def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
         """The model of ``spec`` in ``version``."""
-        xml = make_mjcf(spec, board_body=not version.board_in_world)
-        return dm_mujoco.wrapper.MjModel(mujoco.MjModel.from_xml_string(xml))
+        return dm_mujoco.wrapper.MjModel(compile_model(spec, version.number))
 
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""

@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import gymnasium
@@ -111,6 +115,32 @@ def test_a_stage_that_raises_is_its_traceback_and_exit_1_naming_it(capsys, tmp_p
     assert "Traceback" in err and "ValueError: a bug inside the evaluation" in err
     assert "tolins bench: stage eval-C1.1-seed0 failed (ValueError" in err
     assert not (tmp_path / "results.json").exists()
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_running_training_and_exits_130(tmp_path):
+    """SIGINT while π_n trains: the bench stops within a control step of its rollouts
+    (the training's stage is left unfinished, not run to its end) and exits 130."""
+    command = [sys.executable, "-m", "tolins", "bench", "--profile", "quick", "--rows", "C2.3"]
+    command += ["--backend", "kinematic", "--seeds", "1", "--no-study", "--no-robustness"]
+    command += ["--no-robot", "--out", str(tmp_path)]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}  # each log line as it is written
+    bench = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    try:
+        for line in bench.stdout:
+            if line.startswith("training pi_n_safe-seed0"):
+                bench.send_signal(signal.SIGINT)
+                break
+        _, err = bench.communicate(timeout=120)
+    finally:
+        bench.kill()
+    assert bench.returncode == 130, err[-2000:]
+    assert "tolins bench: interrupted" in err
+    # Stopped before its folder was made or half-way through it: not finished.
+    assert not list((tmp_path / "stages").glob("pi_n_safe-seed0-*/" + MARKER))
+    assert list((tmp_path / "stages").glob("bc_safe-seed0-*/" + MARKER))  # kept for a resume
 
 
 # --- the stage cache -------------------------------------------------------------------

@@ -10,6 +10,9 @@ import time
 import pytest
 
 from tolins.bench.pipeline.executor import Job, LocalExecutor, critical_paths, failed_stage
+from tolins.policies import EXPERTS
+from tolins.rollouts import runner
+from tolins.rollouts.stopping import stop_requested
 
 _BARRIER = threading.Barrier(2, timeout=10)
 _LOG: list[str] = []
@@ -79,6 +82,35 @@ def test_a_failure_stops_the_run_and_is_raised() -> None:
     assert "(raised by the bench's stage bad)" in raised.value.__notes__
 
 
+def _many_episodes(name: str) -> str:
+    """20,000 episodes of the kinematic 2*2 (half a minute or more), then its name logged."""
+    envs = runner.VectorEnvCache("kinematic", num_envs=16)
+    try:
+        jobs = [runner.Job("tolins/Circle2x2-v2", EXPERTS["safe"](), s) for s in range(20_000)]
+        runner.run_jobs(envs, jobs)
+    finally:
+        envs.close()
+    _LOG.append(name)
+    return name
+
+
+def _fail_soon(name: str) -> str:
+    time.sleep(0.5)
+    return _fail(name)
+
+
+def test_a_failure_stops_the_running_jobs_at_their_next_control_step() -> None:
+    _LOG.clear()
+    jobs = [Job("long", _many_episodes, ("long",)), Job("bad", _fail_soon, ("bad",))]
+    with pytest.raises(RuntimeError, match="bad failed"):
+        LocalExecutor(2).run(jobs)
+    assert "long" not in _LOG  # it stopped instead of running its episodes to the end
+    assert not stop_requested()  # and rollouts run again
+    envs = runner.VectorEnvCache("kinematic", num_envs=1)
+    assert runner.run_jobs(envs, [runner.Job("tolins/Circle2x2-v2", EXPERTS["safe"](), 0)])
+    envs.close()
+
+
 def _count(name: str, *deps: object) -> tuple[str, int, tuple]:
     """A pure-Python loop (it holds the GIL), then where it ran and what it was given."""
     total = sum(i * i for i in range(200_000))
@@ -104,6 +136,27 @@ def test_own_process_jobs_run_in_processes_of_their_own_and_take_results() -> No
     assert results["d"] == f"d<{results['c']}"
     assert {executor.placement[n]["pid"] for n in "abc"} == pids
     assert executor.placement["d"]["pid"] == os.getpid()
+
+
+def _sleep_long(name: str) -> str:
+    time.sleep(600)
+    return name
+
+
+def test_a_failure_ends_a_running_own_process_job_with_its_process() -> None:
+    executor = LocalExecutor(2)
+    began = time.monotonic()
+    try:
+        with pytest.raises(RuntimeError, match="bad failed"):
+            executor.run(
+                [
+                    Job("slow", _sleep_long, ("slow",), own_process=True),
+                    Job("bad", _fail_soon, ("bad",)),
+                ]
+            )
+    finally:
+        executor.close()
+    assert time.monotonic() - began < 300  # not the 600 s the process would sleep
 
 
 def test_a_failure_in_an_own_process_job_is_raised() -> None:

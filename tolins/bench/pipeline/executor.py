@@ -17,9 +17,10 @@ in where and when each job runs:
   :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
 
 Results are identical (tested): every stage's seeds are fixed by its config, not by
-where it runs. A job that raises stops the run (the running ones end, no more start); its
-exception is raised with the stage's name attached (:func:`failed_stage`, and a note in
-its traceback). Stage folders need a filesystem every node shares (``DIR`` is checked on
+where it runs. A job that raises stops the run: no more start, and locally the running ones
+stop at their next control step (:mod:`tolins.rollouts.stopping`; a process of their own
+is ended), as on Ctrl-C; the exception is raised with the stage's name attached
+(:func:`failed_stage`, and a note in its traceback). Stage folders need a filesystem every node shares (``DIR`` is checked on
 the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
 """
@@ -28,22 +29,19 @@ from __future__ import annotations
 
 import heapq
 import multiprocessing
+import multiprocessing.pool
 import os
 import re
 import socket
 import sys
 import threading
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import (
-    FIRST_COMPLETED,
-    Future,
-    ProcessPoolExecutor,
-    ThreadPoolExecutor,
-    wait,
-)
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from tolins.rollouts.stopping import clear_stop, raise_if_stopped, request_stop
 
 EXECUTORS = ("local", "ray")
 INSTALL_RAY = "pip install 'tolins[ray]'"
@@ -106,16 +104,15 @@ class LocalExecutor:
     def __init__(self, workers: int = 2) -> None:
         self.workers = workers
         self.placement: dict[str, dict[str, Any]] = {}
-        self._processes: ProcessPoolExecutor | None = None
+        self._processes: multiprocessing.pool.Pool | None = None
         self._processes_made = threading.Lock()
 
-    def _process_pool(self) -> ProcessPoolExecutor:
+    def _process_pool(self) -> multiprocessing.pool.Pool:
         """The processes of ``own_process`` jobs (spawned on first use: forking a process
         with threads running is unsafe), ``workers`` of them, kept until :meth:`close`."""
         with self._processes_made:
             if self._processes is None:
-                context = multiprocessing.get_context("spawn")
-                self._processes = ProcessPoolExecutor(self.workers, mp_context=context)
+                self._processes = multiprocessing.get_context("spawn").Pool(self.workers)
             return self._processes
 
     def candidate_pool(self) -> None:
@@ -130,6 +127,10 @@ class LocalExecutor:
         on_done: DoneCallback = None,
         costs: Mapping[str, float] | None = None,
     ) -> dict[str, Any]:
+        """Run ``jobs``; their results by name. If one raises or the run is interrupted,
+        no more start and the running ones stop at their next control step
+        (:mod:`tolins.rollouts.stopping`; an ``own_process`` job's process is ended by
+        :meth:`close`), then the error is raised."""
         from tolins.learning.artefacts import single_threaded_torch
 
         results: dict[str, Any] = {}
@@ -149,7 +150,7 @@ class LocalExecutor:
                 on_start(job)
             args = (*job.args, *[results[d] for d in job.deps])
             if job.own_process:
-                value, where = self._process_pool().submit(_call_here, job.fn, args).result()
+                value, where = _result(self._process_pool().apply_async(_call_here, (job.fn, args)))
             else:
                 value, where = job.fn(*args), _where()
             self.placement[job.name] = where
@@ -157,33 +158,49 @@ class LocalExecutor:
                 on_done(job, value)
             return value
 
-        with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
-            running: dict[Future, str] = {}
-            while ready or running:
-                while ready and len(running) < self.workers:
-                    name = heapq.heappop(ready)[2]
-                    running[pool.submit(call, by_name[name])] = name
-                done, _ = wait(running, return_when=FIRST_COMPLETED)
-                for future in done:
-                    name = running.pop(future)
-                    error = future.exception()
-                    if error is not None:
-                        for other in running:  # let the running ones end, start no more
-                            other.cancel()
-                        wait(running)
-                        raise _mark_failed(error, name)
-                    results[name] = future.result()
-                    for later in needed_by[name]:
-                        waiting[later].discard(name)
-                        if not waiting[later]:
-                            heapq.heappush(ready, (-priority[later], order[later], later))
+        try:
+            with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
+                running: dict[Future, str] = {}
+                try:
+                    while ready or running:
+                        while ready and len(running) < self.workers:
+                            name = heapq.heappop(ready)[2]
+                            running[pool.submit(call, by_name[name])] = name
+                        done, _ = wait(running, return_when=FIRST_COMPLETED)
+                        for future in done:
+                            name = running.pop(future)
+                            error = future.exception()
+                            if error is not None:
+                                raise _mark_failed(error, name)
+                            results[name] = future.result()
+                            for later in needed_by[name]:
+                                waiting[later].discard(name)
+                                if not waiting[later]:
+                                    heapq.heappush(ready, (-priority[later], order[later], later))
+                except BaseException:
+                    request_stop()  # leaving the pool waits for the running jobs: now brief
+                    raise
+        finally:
+            clear_stop()
         return {job.name: results[job.name] for job in jobs}
 
     def close(self) -> None:
-        """End the processes of ``own_process`` jobs, if any ran."""
+        """End the processes of ``own_process`` jobs, if any ran (a job still running in
+        one, after a failure or an interruption, is ended with it)."""
         if self._processes is not None:
-            self._processes.shutdown(cancel_futures=True)
+            self._processes.terminate()
+            self._processes.join()
             self._processes = None
+
+
+def _result(pending: multiprocessing.pool.AsyncResult) -> Any:
+    """What a process of the pool returns for ``pending`` (its error raised), checking for a
+    stop request (:func:`~tolins.rollouts.stopping.raise_if_stopped`) twice a second."""
+    while True:
+        try:
+            return pending.get(timeout=0.5)
+        except multiprocessing.TimeoutError:
+            raise_if_stopped()
 
 
 def critical_paths(jobs: Sequence[Job], costs: Mapping[str, float]) -> dict[str, float]:

@@ -1,0 +1,40 @@
+"""A request that this process's rollouts stop early: every episode loop of
+:mod:`tolins.rollouts.runner` raises :class:`Stopped` at its next control step once
+:func:`request_stop` was called, until :func:`clear_stop`.
+
+The bench's local executor requests it when it is interrupted (Ctrl-C) or a stage fails,
+so that the stages running beside it end within a control step instead of running to
+their end; their finished work (stage folders, RS-GAIL's per-iteration checkpoints) is
+kept, as every file is written atomically.
+"""
+
+from __future__ import annotations
+
+import threading
+
+_requested = threading.Event()
+
+
+class Stopped(Exception):
+    """A rollout loop ended because a stop was requested (:func:`request_stop`)."""
+
+
+def request_stop() -> None:
+    """Ask every rollout loop of this process to stop at its next control step."""
+    _requested.set()
+
+
+def clear_stop() -> None:
+    """Let rollouts run again."""
+    _requested.clear()
+
+
+def stop_requested() -> bool:
+    """Whether a stop has been requested and not cleared."""
+    return _requested.is_set()
+
+
+def raise_if_stopped() -> None:
+    """Raise :class:`Stopped` if a stop has been requested."""
+    if _requested.is_set():
+        raise Stopped("stopped on request (the run was interrupted or another stage failed)")

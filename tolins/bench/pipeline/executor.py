@@ -17,12 +17,14 @@ in where and when each job runs:
   :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
 
 Results are identical (tested): every stage's seeds are fixed by its config, not by
-where it runs. A job that raises stops the run: no more start, and locally the running ones
-stop at their next control step (:mod:`tolins.rollouts.stopping`; a process of their own
-is ended), as on Ctrl-C; the exception is raised with the stage's name attached
-(:func:`failed_stage`, and a note in its traceback). Stage folders need a filesystem every node shares (``DIR`` is checked on
+where it runs. Stage folders need a filesystem every node shares (``DIR`` is checked on
 the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
+
+A job that raises stops the run: no more start, and locally the running ones stop at
+their next control step (:mod:`tolins.rollouts.stopping`; a process of their own is
+ended), as on Ctrl-C; the exception is raised with the stage's name attached
+(:func:`failed_stage`, and a note in its traceback).
 """
 
 from __future__ import annotations

@@ -121,9 +121,14 @@ def test_a_stage_that_raises_is_its_traceback_and_exit_1_naming_it(capsys, tmp_p
 def test_ctrl_c_stops_the_running_training_and_exits_130(tmp_path):
     """SIGINT while π_n trains: the bench stops within a control step of its rollouts
     (the training's stage is left unfinished, not run to its end) and exits 130."""
-    command = [sys.executable, "-m", "tolins", "bench", "--profile", "quick", "--rows", "C2.3"]
-    command += ["--backend", "kinematic", "--seeds", "1", "--no-study", "--no-robustness"]
-    command += ["--no-robot", "--out", str(tmp_path)]
+    options = ["bench", "--profile", "quick", "--rows", "C2.3", "--backend", "kinematic"]
+    options += ["--seeds", "1", "--no-study", "--no-robustness", "--no-robot"]
+    options += ["--out", str(tmp_path)]
+    # SIGINT raises KeyboardInterrupt even where the test runs in the background (a shell
+    # starts background jobs with SIGINT ignored, and their children inherit that).
+    code = "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    code += f"from tolins.cli import main; sys.exit(main({options!r}))"
+    command = [sys.executable, "-c", code]
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}  # each log line as it is written
     bench = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env

@@ -2,10 +2,11 @@
 
 :class:`WarpBatch` is the :class:`~tolins.physics.protocol.BatchPhysics` of the vector env on
 ``mujoco_warp``: the model :func:`tolins.make_mjcf` writes, put on the device as one
-``mjw.Model`` with ``nworld = num_envs`` worlds, and the control step of
-:class:`~tolins.physics.servo.ServoStepper` (servo set-points re-anchored
-``act = qpos``, ``contact_checks`` chunks of physics steps, the summed pin touch force read
-after each for ``peak_force``, the wrench from the force/torque sensors). Physics steps run
+``mjw.Model`` with ``nworld = num_envs`` worlds, stepped by the control step every MuJoCo
+simulator of tolins shares, :func:`~tolins.physics.servo.servo_control_step` (servo
+set-points re-anchored ``act = qpos``, ``contact_checks`` chunks of physics steps, the
+summed pin touch force read after each for ``peak_force``; the wrench from the
+force/torque sensors), always on the contact step: the worlds step in lockstep. Physics steps run
 as a captured Warp graph (a CUDA graph on a GPU, Warp's replayed CPU graph on ``"cpu"``):
 on the CPU device a captured step is about 10× faster than launching its ~120 kernels
 from Python.
@@ -40,7 +41,8 @@ from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, bend_fields, model_layout
 from tolins.physics.compiled import model_builder
 from tolins.physics.protocol import BatchState, Capabilities
-from tolins.physics.schedule import contact_chunks, control_plan
+from tolins.physics.schedule import control_plan
+from tolins.physics.servo import servo_control_step
 
 _INSTALL = "pip install 'tolins[warp]'"
 #: Contact buffer per pin and world (at least :data:`MIN_CONTACTS`). The most contacts on
@@ -227,15 +229,14 @@ class WarpBatch(Capabilities):
         ctrl = self.d.ctrl.numpy()
         ctrl[ids] = np.asarray(velocities, dtype=float)[:, self.layout.joint_pose]
         self.d.ctrl.assign(ctrl)
-        self.d.act.assign(self.d.qpos.numpy())  # the servos re-anchored, as ServoStepper
-        peak = np.zeros(len(ids))
-        for n in contact_chunks(self.substeps, self.checks):
-            self._advance(n)
-            touch = self.d.sensordata.numpy()[ids][:, self.layout.touch].astype(float).sum(axis=1)
-            peak = np.maximum(peak, touch)
+        peak, faults = servo_control_step(_Worlds(self, ids), self.substeps, self.checks)
         if saved is not None:
             self._restore(saved, ~mask)
-        return self._state(ids, peak * FORCE_SCALE, self._faults(ids))
+        return self._state(ids, peak * FORCE_SCALE, faults)
+
+    def _touch(self, ids: np.ndarray) -> np.ndarray:
+        """The summed pin touch force of worlds ``ids`` now (model units)."""
+        return self.d.sensordata.numpy()[ids][:, self.layout.touch].astype(float).sum(axis=1)
 
     def _advance(self, nstep: int) -> None:
         """``nstep`` physics steps of every world, through captured graphs (of one step on
@@ -306,3 +307,34 @@ class WarpBatch(Capabilities):
         """Release the device buffers and graphs."""
         self._graphs.clear()
         self.m = self.d = None
+
+
+class _Worlds:
+    """Worlds ``ids`` of a :class:`WarpBatch` as the simulations one
+    :func:`~tolins.physics.servo.servo_control_step` drives. All worlds step at once, so
+    they stay on the contact step (no free flight), and a fault is read from Warp's
+    overflow bits and the state (MuJoCo Warp counts no warnings)."""
+
+    def __init__(self, batch: WarpBatch, ids: np.ndarray) -> None:
+        self.batch, self.ids = batch, ids
+
+    def warning_counts(self) -> list[int]:
+        return []
+
+    def anchor(self) -> None:
+        self.batch.d.act.assign(self.batch.d.qpos.numpy())
+
+    def choose_steps(self, chunks: list[int]) -> None:
+        pass
+
+    def no_force(self) -> np.ndarray:
+        return np.zeros(len(self.ids))
+
+    def physics_steps(self, n: int) -> None:
+        self.batch._advance(n)
+
+    def higher_force(self, peak: np.ndarray) -> np.ndarray:
+        return np.maximum(peak, self.batch._touch(self.ids))
+
+    def faults(self, warnings_before: list[int]) -> tuple[str | None, ...]:
+        return self.batch._faults(self.ids)

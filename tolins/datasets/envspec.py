@@ -20,16 +20,12 @@ from gymnasium.envs.registration import EnvSpec
 import tolins  # noqa: F401  (registers the env ids)
 from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.insertion_env import InsertionEnv
+from tolins.envs.tasks import check_env_id
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 
 #: The entry point of every dataset's env spec.
 ENTRY_POINT = "tolins.datasets.envspec:make_env"
 _TYPES = {cls.__name__: cls for cls in (CircularSocket, PolygonSocket, InitialPoseDistribution)}
-
-
-def tolins_ids() -> list[str]:
-    """Every registered tolins env id."""
-    return sorted(i for i in gym.registry if i.startswith("tolins/"))
 
 
 def encode(value: Any) -> Any:
@@ -72,9 +68,7 @@ def dataset_env_spec(env_id: str, **kwargs: Any) -> EnvSpec:
 
     Raises ``ValueError`` for an id that is not a tolins env.
     """
-    if env_id not in tolins_ids():
-        raise ValueError(f"unknown env {env_id!r}; allowed: {', '.join(tolins_ids())}")
-    registered = gym.spec(env_id)
+    registered = gym.spec(check_env_id(env_id))
     merged = {**registered.kwargs, **kwargs}
     if "socket" not in merged:
         raise ValueError(

@@ -21,9 +21,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tolins.datasets.envspec import tolins_ids
 from tolins.datasets.target import HDF5_IO
 from tolins.datasets.writer import UNITS
+from tolins.envs.tasks import env_ids
 from tolins.rollouts.episodes import Episode
 
 #: How to get Minari (the extra of :mod:`tolins.datasets`).
@@ -75,10 +75,10 @@ def check_dataset(dataset: Any, env_id: str | None, label: str) -> None:
     """Raise ``ValueError`` unless ``dataset`` holds episodes of the tolins env ``env_id``."""
     spec = dataset.env_spec
     found = None if spec is None else spec.id
-    if found is None or found not in tolins_ids():
+    if found is None or found not in env_ids():
         raise ValueError(
             f"--demos {label}: env {found!r} is not a tolins env; allowed: a dataset of "
-            f"one of {', '.join(tolins_ids())}"
+            f"one of {', '.join(env_ids())}"
         )
     if env_id is not None and found != env_id:
         raise ValueError(f"--demos {label}: episodes of {found}; allowed: episodes of {env_id}")

@@ -15,7 +15,7 @@ import pytest
 
 from tolins.bench.jobs import row_evaluation
 from tolins.bench.pipeline.config import BenchConfig
-from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.pipeline.runner import plan_bench, run_bench
 from tolins.bench.store.cache import MARKER, StageCache, stage_key
 from tolins.bench.table.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD
 from tolins.bench.table.results import read_results, row_entry
@@ -262,6 +262,26 @@ def _no_sections(out, rows: str | None = None) -> BenchConfig:
     return BenchConfig(
         profile="tiny", backend="kinematic", rows=rows, out=str(out), study=False, robustness=False
     )
+
+
+def test_a_dry_run_counts_the_stages_to_run_and_runs_nothing(tmp_path, capsys):
+    options = ["bench", "--profile", "tiny", "--rows", "C1.3", "--backend", "kinematic"]
+    options += ["--no-study", "--no-robustness", "--no-robot", "--out", str(tmp_path / "b")]
+    config = _no_sections(tmp_path / "b", rows="C1.3")
+    assert main([*options, "--dry-run"]) == 0
+    before = capsys.readouterr().out
+    assert not (tmp_path / "b").exists()  # nothing written
+    # the 2*2's efficient demonstrations, BC, RS-GAIL and the row's evaluation
+    assert before.startswith(f"4 stages in {tmp_path / 'b'}: 0 finished, 4 to run")
+    assert "| training | 0 | 2 |" in before and "Nothing was run." in before
+    run_bench(config, progress=False, log=lambda _: None)
+    planned = plan_bench(config)
+    assert len(planned) == 4 and all(stage.finished for stage in planned)
+    [bc] = (tmp_path / "b" / "stages").glob("bc_efficient-seed0-*")
+    (bc / "policy.pt").write_bytes(b"damaged")
+    assert main([*options, "--dry-run"]) == 0
+    assert "| training | 1 | 1 |" in capsys.readouterr().out  # it would run BC again
+    assert (bc / MARKER).exists()  # and left it where it was
 
 
 @pytest.mark.slow

@@ -7,6 +7,7 @@ import argparse
 import sys
 import traceback
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tolins.bench.pipeline.config import SEEDS_MAX, BenchConfig
 from tolins.bench.pipeline.executor import EXECUTORS, failed_stage
@@ -14,6 +15,9 @@ from tolins.bench.pipeline.profiles import PROFILES
 from tolins.cli import checks
 from tolins.cli.args import Option, add_config_arguments, config_from_args
 from tolins.physics import BACKENDS
+
+if TYPE_CHECKING:
+    from tolins.bench.pipeline.runner import PlannedStage
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -42,6 +46,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "executor": Option(choices=EXECUTORS),
     }
     add_config_arguments(bench, BenchConfig, options)
+    bench.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="print the stages still to run and their expected cost, and run nothing",
+    )
     bench.set_defaults(run=run)
 
 
@@ -54,8 +63,15 @@ def run(args: argparse.Namespace) -> int:
         config = config_from_args(BenchConfig, args, out=str(out))
     except ValueError as error:  # OptionError too
         return checks.fail("tolins bench", error)
-    from tolins.bench.pipeline.runner import run_bench
+    from tolins.bench.pipeline.runner import plan_bench, run_bench
     from tolins.bench.reports.markdown import format_claims, format_results_table
+
+    if args.dry_run:
+        try:
+            print(format_plan(plan_bench(config), config))
+        except (ValueError, FileNotFoundError) as error:
+            return checks.fail("tolins bench", error)
+        return 0
 
     try:
         bench = run_bench(config)
@@ -75,3 +91,37 @@ def run(args: argparse.Namespace) -> int:
     print(format_claims(bench.claims))
     print(f"\n{bench.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json and plots")
     return 0
+
+
+def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
+    """``tolins bench --dry-run``'s report: per kind of stage, how many are finished, how
+    many to run and their expected work, and that work spread over ``config.workers``."""
+    from tolins.bench.pipeline.progress import KINDS, stage_kind
+
+    todo = [stage for stage in stages if not stage.finished]
+    lines = [
+        f"{len(stages)} stages in {config.out}: {len(stages) - len(todo)} finished, "
+        f"{len(todo)} to run",
+        "",
+        "| stages | finished | to run | expected work to run |",
+        "|---|--:|--:|--:|",
+    ]
+    for kind in KINDS:
+        of_kind = [stage for stage in stages if stage_kind(stage.name) == kind]
+        if of_kind:
+            left = [stage for stage in of_kind if not stage.finished]
+            lines.append(f"| {kind} | {len(of_kind) - len(left)} | {len(left)} | {_hours(left)} |")
+    lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {_hours(todo)} |")
+    work = sum(stage.expected_s for stage in todo)
+    place = "cores" if config.executor == "local" else "Ray CPUs"
+    lines += [
+        "",
+        f"About {work / config.workers / 3600:.1f} h on {config.workers} {place} "
+        "(--workers): each stage's budget at the speed per env step of reference:quick's "
+        "stages (tolins.bench.pipeline.progress). Nothing was run.",
+    ]
+    return "\n".join(lines)
+
+
+def _hours(stages: list[PlannedStage]) -> str:
+    return f"{sum(stage.expected_s for stage in stages) / 3600:.1f} h"

@@ -28,10 +28,14 @@ class Plan:
     Args:
         cache: Where the stages live.
         log: Where to say that a bad finished stage is run again.
+        dry_run: Plan only: leave a bad finished stage where it is (and count it as a
+            job) instead of moving it aside.
     """
 
-    def __init__(self, cache: StageCache, log: Callable[[str], None]) -> None:
-        self.cache, self.log = cache, log
+    def __init__(
+        self, cache: StageCache, log: Callable[[str], None], *, dry_run: bool = False
+    ) -> None:
+        self.cache, self.log, self.dry_run = cache, log, dry_run
         self.stages: dict[str, Stage[Any]] = {}
         self.done: dict[str, Path] = {}
         self.cached: set[str] = set()
@@ -71,10 +75,17 @@ class Plan:
         or ``None`` passed as such; nothing with ``takes_upstream=False``) that runs after
         the earlier stages ``needs`` (the results of those that run as jobs come last)."""
         self.stages[stage.name] = stage
-        bad = self.cache.discard_bad(stage.name, stage.config)
-        if bad is not None:
-            self.log(bad)
-        if self.cache.finished(stage.name, stage.config):
+        if self.dry_run:
+            finished = self.cache.finished(stage.name, stage.config)
+            usable = (
+                finished and self.cache.problem(self.cache.folder(stage.name, stage.config)) is None
+            )
+        else:
+            bad = self.cache.discard_bad(stage.name, stage.config)
+            if bad is not None:
+                self.log(bad)
+            usable = self.cache.finished(stage.name, stage.config)
+        if usable:
             folder = self.cache.folder(stage.name, stage.config)
             self.done[stage.name] = folder if result is None else folder / result
             self.cached.add(stage.name)

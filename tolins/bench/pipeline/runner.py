@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +49,17 @@ from tolins.datasets.reader import require_minari
 from tolins.mjcf.panda import require_panda
 
 
+@dataclass(frozen=True)
+class PlannedStage:
+    """A stage of a planned run (:func:`plan_bench`)."""
+
+    name: str
+    finished: bool
+    """Finished before (cached): the run only reads it."""
+    expected_s: float
+    """Its expected wall time (s; :func:`~tolins.bench.pipeline.progress.expected_cost`)."""
+
+
 def run_bench(
     config: BenchConfig, *, progress: bool = True, log: Callable[[str], None] = tqdm.write
 ) -> BenchRun:
@@ -55,6 +67,42 @@ def run_bench(
     its lock (:mod:`.lock`: ``ValueError`` naming the process when another bench has it)."""
     with locked_folder(config.out):
         return _run_bench(config, progress=progress, log=log)
+
+
+def plan_bench(config: BenchConfig) -> list[PlannedStage]:
+    """Every stage of the run ``config`` describes, finished or not, with its expected cost
+    (:func:`~tolins.bench.pipeline.progress.expected_cost`): what ``tolins bench --dry-run``
+    prints. Runs nothing and writes nothing; a finished stage whose files are bad counts as
+    one to run (a run would move it aside and run it again)."""
+    profile = PROFILES[config.profile]
+    plan = Plan(StageCache(Path(config.out)), log=lambda _: None, dry_run=True)
+    _plan_stages(plan, config, None, local=config.executor == "local", inner_bars=False)
+    return [
+        PlannedStage(name, name in plan.done, expected_cost(name, profile, config.backend))
+        for name in [*plan.done, *(job.name for job in plan.jobs)]
+    ]
+
+
+def _plan_stages(
+    plan: Plan, config: BenchConfig, pool: Any, *, local: bool, inner_bars: bool
+) -> None:
+    """Plan every stage of ``config``'s run into ``plan`` (RS-GAIL's candidates on ``pool``;
+    the study on 2 processes when the stages run ``local``ly, else in one Ray task's CPU)."""
+    profile, backend = PROFILES[config.profile], config.backend
+    seeds = config.seeds or profile.seeds
+    rows = select_rows(config.rows, baselines=profile.baselines)
+    if any(demonstrations(t, profile, backend, 0) for row in rows for t in row.trainings):
+        require_minari("tolins bench (its demonstrations are Minari datasets)")
+    plan_trainings(plan, rows, seeds, profile, backend, pool, inner_bars, plan.log)
+    plan_evaluations(plan, rows, seeds, profile, backend)
+    if config.robustness:
+        plan_robustness(plan, seeds, profile, backend)
+    if config.robot and backend == "mujoco":
+        require_panda("tolins bench (its Panda table; --no-robot leaves it out)")
+        plan_robustness(plan, seeds, profile, backend, ROBOT)
+    if config.study:
+        plan_study(plan, profile, backend, 2 if local else 1, inner_bars)
+    plan_trajectories(plan, backend)
 
 
 def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None]) -> BenchRun:
@@ -72,22 +120,9 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
     try:
         local = executor.name == "local"
         plan = Plan(cache, log)
-        if any(demonstrations(t, profile, backend, 0) for row in rows for t in row.trainings):
-            require_minari("tolins bench (its demonstrations are Minari datasets)")
-        pool = executor.candidate_pool()
         # Trainings run side by side: their own progress bars would interleave.
         inner_bars = progress and local and config.workers == 1
-        plan_trainings(plan, rows, seeds, profile, backend, pool, inner_bars, log)
-        plan_evaluations(plan, rows, seeds, profile, backend)
-        if config.robustness:
-            plan_robustness(plan, seeds, profile, backend)
-        if config.robot and backend == "mujoco":
-            require_panda("tolins bench (its Panda table; --no-robot leaves it out)")
-            plan_robustness(plan, seeds, profile, backend, ROBOT)
-        if config.study:
-            workers = 2 if local else 1  # a Ray task holds one CPU
-            plan_study(plan, profile, backend, workers, inner_bars)
-        plan_trajectories(plan, backend)
+        _plan_stages(plan, config, executor.candidate_pool(), local=local, inner_bars=inner_bars)
         names = [*plan.done, *(job.name for job in plan.jobs)]
         costs = {name: expected_cost(name, profile, backend) for name in names}
         with BenchProgress(costs, plan.done, show=progress) as stages:

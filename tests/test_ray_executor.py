@@ -270,6 +270,17 @@ def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray)
     assert all(started[name] <= finished[name] for name in started)
 
 
+def test_tasks_start_as_cpus_free_up_the_costliest_chain_first(local_ray):
+    executor = RayExecutor()
+    executor.run([Stage(name, time.sleep, (0.5,)) for name in ("a", "b")])  # both workers up
+    jobs = [Stage(name, time.sleep, (1.5,)) for name in ("x", "y", "big")]
+    order = []
+    executor.run(jobs, on_start=lambda job: order.append(job.name), costs={"big": 10.0})
+    # 2 CPUs: "big" and "x" first, "y" once one of them has ended (submitted all at once,
+    # Ray would start "x" and "y")
+    assert sorted(order[:2]) == ["big", "x"] and order[2] == "y"
+
+
 def test_a_failed_task_is_raised_naming_its_stage(local_ray):
     with pytest.raises(ValueError, match="math domain error") as raised:
         RayExecutor().run([Stage("bad", math.sqrt, (-1.0,))], on_start=lambda _: None)

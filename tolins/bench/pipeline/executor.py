@@ -6,14 +6,16 @@ results it takes as its last arguments. Both executors call the same functions w
 same arguments and return the results by job name in the jobs' order; they differ only
 in where and when each job runs:
 
-- local: every job on a pool of ``workers`` threads as soon as its dependencies are done,
-  the one with the costliest chain of work behind it first (:func:`critical_paths`), torch
-  on one thread; RS-GAIL's candidates on each training's own thread pool. A job that holds
-  the GIL most of its time (``own_process``: SB3's Python loop) runs in a process of its
-  own, so that two of them do not take turns on one core.
-- Ray: every job as a task (1 CPU) as soon as its dependencies are done; torch on one
-  thread in ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as
-  locally: torch's results can depend on its thread count); RS-GAIL's candidates on one
+Both start a job once its dependencies are done and a worker is free, the ready job with
+the costliest chain of work behind it first (:class:`Schedule`, :func:`critical_paths`).
+
+- local: on a pool of ``workers`` threads, torch on one thread; RS-GAIL's candidates on
+  each training's own thread pool. A job that holds the GIL most of its time
+  (``own_process``: SB3's Python loop) runs in a process of its own, so that two of them
+  do not take turns on one core.
+- Ray: as a task (1 CPU) when one of the cluster's CPUs is free; torch on one thread in
+  ``side_by_side`` tasks and on as many threads as the driver's elsewhere (as locally:
+  torch's results can depend on its thread count); RS-GAIL's candidates on one
   :class:`~tolins.rollouts.ray_pool.RolloutWorker` actor per CPU of the cluster.
 
 Results are identical (tested): every stage's seeds are fixed by its config, not by
@@ -136,16 +138,8 @@ class LocalExecutor:
         from tolins.learning.artefacts import single_threaded_torch
 
         results: dict[str, Any] = {}
-        priority = critical_paths(jobs, costs or {})
-        order = {job.name: i for i, job in enumerate(jobs)}
-        waiting = {job.name: set(job.deps) & set(order) for job in jobs}
-        needed_by: dict[str, list[str]] = {job.name: [] for job in jobs}
-        for job in jobs:
-            for dep in waiting[job.name]:
-                needed_by[dep].append(job.name)
+        schedule = Schedule(jobs, costs or {})
         by_name = {job.name: job for job in jobs}
-        ready = [(-priority[n], order[n], n) for n, deps in waiting.items() if not deps]
-        heapq.heapify(ready)
 
         def call(job: Job) -> Any:
             if on_start:
@@ -164,9 +158,9 @@ class LocalExecutor:
             with single_threaded_torch(), ThreadPoolExecutor(self.workers) as pool:
                 running: dict[Future, str] = {}
                 try:
-                    while ready or running:
-                        while ready and len(running) < self.workers:
-                            name = heapq.heappop(ready)[2]
+                    while schedule.ready or running:
+                        while schedule.ready and len(running) < self.workers:
+                            name = schedule.next()
                             running[pool.submit(call, by_name[name])] = name
                         done, _ = wait(running, return_when=FIRST_COMPLETED)
                         for future in done:
@@ -175,10 +169,7 @@ class LocalExecutor:
                             if error is not None:
                                 raise _mark_failed(error, name)
                             results[name] = future.result()
-                            for later in needed_by[name]:
-                                waiting[later].discard(name)
-                                if not waiting[later]:
-                                    heapq.heappush(ready, (-priority[later], order[later], later))
+                            schedule.finished(name)
                 except BaseException:
                     request_stop()  # leaving the pool waits for the running jobs: now brief
                     raise
@@ -203,6 +194,46 @@ def _result(pending: multiprocessing.pool.AsyncResult) -> Any:
             return pending.get(timeout=0.5)
         except multiprocessing.TimeoutError:
             raise_if_stopped()
+
+
+class Schedule:
+    """Which job starts next: of those whose dependencies are done, the one with the
+    costliest chain of work behind it (:func:`critical_paths`; ties in list order).
+
+    Args:
+        jobs: The jobs (a job's dependencies before it; names outside ``jobs`` are done).
+        costs: Seconds by job name (a job missing from it costs 1).
+    """
+
+    def __init__(self, jobs: Sequence[Job], costs: Mapping[str, float]) -> None:
+        self._priority = critical_paths(jobs, costs)
+        self._order = {job.name: i for i, job in enumerate(jobs)}
+        self._waiting = {job.name: set(job.deps) & set(self._order) for job in jobs}
+        self._needed_by: dict[str, list[str]] = {job.name: [] for job in jobs}
+        for job in jobs:
+            for dep in self._waiting[job.name]:
+                self._needed_by[dep].append(job.name)
+        self._ready = [self._entry(n) for n, deps in self._waiting.items() if not deps]
+        heapq.heapify(self._ready)
+
+    @property
+    def ready(self) -> bool:
+        """Whether a job can start now."""
+        return bool(self._ready)
+
+    def next(self) -> str:
+        """The name of the job to start now (taken off the ready ones)."""
+        return heapq.heappop(self._ready)[2]
+
+    def finished(self, name: str) -> None:
+        """Job ``name`` is done: the jobs that waited only for it become ready."""
+        for later in self._needed_by[name]:
+            self._waiting[later].discard(name)
+            if not self._waiting[later]:
+                heapq.heappush(self._ready, self._entry(later))
+
+    def _entry(self, name: str) -> tuple[float, int, str]:
+        return -self._priority[name], self._order[name], name
 
 
 def critical_paths(jobs: Sequence[Job], costs: Mapping[str, float]) -> dict[str, float]:
@@ -285,33 +316,36 @@ class RayExecutor:
         on_done: DoneCallback = None,
         costs: Mapping[str, float] | None = None,
     ) -> dict[str, Any]:
-        """As :meth:`LocalExecutor.run`; Ray schedules the tasks (``costs`` unused).
+        """As :meth:`LocalExecutor.run`: a task is submitted when its dependencies are done
+        and one of the cluster's CPUs is free, the ready job with the costliest chain of work
+        behind it first (:class:`Schedule`), so that Ray runs the jobs in that order.
 
         ``on_start`` is called when a task begins on its worker (each task puts its name on
-        a :class:`ray.util.queue.Queue` first, which this loop reads once a second), not
-        when it is submitted."""
+        a :class:`ray.util.queue.Queue` first, which this loop reads once a second)."""
         ray = self._ray
         task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
         started = _start_queue() if on_start else None
+        schedule = Schedule(jobs, costs or {})
+        slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
         by_name = {job.name: job for job in jobs}
-        values, where = {}, {}
-        for job in jobs:
-            threads = 1 if job.side_by_side else self.torch_threads
-            deps = [values[d] for d in job.deps]
-            options = {"name": job.name}
-            values[job.name], where[job.name] = task.options(**options).remote(
-                job.fn, job.args, threads, self.shared, (started, job.name), *deps
-            )
-        by_ref = {where[job.name]: job for job in jobs}
-        pending = list(by_ref)
+        values: dict[str, Any] = {}
+        running: dict[Any, Job] = {}  # the "where" reference of each task -> its job
         try:
-            while pending:
-                done, pending = ray.wait(pending, num_returns=1, timeout=1.0)
+            while schedule.ready or running:
+                while schedule.ready and len(running) < slots:
+                    job = by_name[schedule.next()]
+                    threads = 1 if job.side_by_side else self.torch_threads
+                    deps = [values[d] for d in job.deps]
+                    values[job.name], where = task.options(name=job.name).remote(
+                        job.fn, job.args, threads, self.shared, (started, job.name), *deps
+                    )
+                    running[where] = job
+                done, _ = ray.wait(list(running), num_returns=1, timeout=1.0)
                 if started is not None and on_start is not None:
                     for name in started.get_nowait_batch(started.qsize()):
                         on_start(by_name[name])
                 for ref in done:
-                    job = by_ref[ref]
+                    job = running.pop(ref)
                     try:
                         self.placement[job.name] = ray.get(ref)
                         value = ray.get(values[job.name])
@@ -320,6 +354,7 @@ class RayExecutor:
                         raise
                     if on_done:
                         on_done(job, value)
+                    schedule.finished(job.name)
         finally:
             if started is not None:
                 started.shutdown()

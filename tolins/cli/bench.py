@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
 def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
     """``tolins bench --dry-run``'s report: per kind of stage, how many are finished, how
     many to run and their expected work, and that work spread over ``config.workers``."""
-    from tolins.bench.pipeline.progress import KINDS, stage_kind
+    from tolins.bench.pipeline.progress import KINDS, format_duration, stage_kind
 
     todo = [stage for stage in stages if not stage.finished]
     lines = [
@@ -110,18 +110,20 @@ def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
         of_kind = [stage for stage in stages if stage_kind(stage.name) == kind]
         if of_kind:
             left = [stage for stage in of_kind if not stage.finished]
-            lines.append(f"| {kind} | {len(of_kind) - len(left)} | {len(left)} | {_hours(left)} |")
-    lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {_hours(todo)} |")
+            lines.append(f"| {kind} | {len(of_kind) - len(left)} | {len(left)} | {_work(left)} |")
+    lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {_work(todo)} |")
     work = sum(stage.expected_s for stage in todo)
     place = "cores" if config.executor == "local" else "Ray CPUs"
     lines += [
         "",
-        f"About {work / config.workers / 3600:.1f} h on {config.workers} {place} "
-        "(--workers): each stage's budget at the speed per env step of reference:quick's "
-        "stages (tolins.bench.pipeline.progress). Nothing was run.",
+        f"About {format_duration(work / config.workers)} on {config.workers} {place} "
+        "(--workers): each stage's budget at the speed per env step of an idle quick "
+        "bench on 2 cores (tolins.bench.pipeline.progress.STEP_SECONDS). Nothing was run.",
     ]
     return "\n".join(lines)
 
 
-def _hours(stages: list[PlannedStage]) -> str:
-    return f"{sum(stage.expected_s for stage in stages) / 3600:.1f} h"
+def _work(stages: list[PlannedStage]) -> str:
+    from tolins.bench.pipeline.progress import format_duration
+
+    return format_duration(sum(stage.expected_s for stage in stages))

@@ -4,8 +4,8 @@ the stage running now, and an estimate of the time left.
 Each stage has an expected cost in seconds (:func:`expected_cost`): the env steps its
 profile budgets for it (episodes × horizon, RS-GAIL's candidates, a baseline's steps, BC's
 epochs over its demonstrations, the study's workpieces) times what a step of that kind of
-work took on 2 cores (:data:`STEP_SECONDS`, from the shipped ``reference:quick`` run's
-``run.json``), plus a fixed start-up cost. The bar's fraction is the expected cost of the
+work took on 2 cores (:data:`STEP_SECONDS`, from an idle quick bench's stage times),
+plus a fixed start-up cost. The bar's fraction is the expected cost of the
 finished stages (cached ones included) over that of all of them.
 
 The time left (:meth:`BenchProgress.remaining_s`) follows the stages as they finish: the
@@ -40,17 +40,20 @@ from tolins.paper import HORIZON
 #: The kinds of stages, in the order a run meets them.
 KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "study")
 #: Seconds per budgeted env step (per BC sample and epoch, per study workpiece) of each
-#: kind of work on the MuJoCo backend, 2 cores (``reference:quick``'s stage wall times;
-#: the deep-RL baselines': benchmarks/README.md, two stages side by side).
+#: kind of work on the MuJoCo backend's ``-v2`` physics, two stages side by side on 2
+#: cores: the quick bench of an idle fresh clone (2026-12-04, 7.7 min; benchmarks/README.md,
+#: "``tolins bench`` wall time"), each kind's measured stage time over its budget; the
+#: deep-RL baselines' from the ``-v2`` paper run's trainings (PPO 280 s and SAC 1,440 s
+#: for 288,000 env steps, two side by side).
 STEP_SECONDS = {
-    "rollout": 1.75e-3,  # an evaluation, robustness or demonstration episode's step
-    "panda-rollout": 25e-3,  # a step of the Panda's table (benchmarks/panda_validation.py)
-    "rs-gail": 1.4e-3,
-    "tolerance-guided": 0.6e-3,
-    "ppo": 1.5e-3,  # on 8 envs in one batch
-    "sac": 5.7e-3,
-    "bc": 2.5e-6,  # per demonstration step and epoch
-    "study": 0.15,  # per workpiece, MuJoCo contact outcomes
+    "rollout": 1.06e-3,  # an evaluation, robustness or demonstration episode's step
+    "panda-rollout": 17e-3,  # a step of the Panda's table
+    "rs-gail": 1.1e-3,
+    "tolerance-guided": 0.41e-3,
+    "ppo": 0.97e-3,  # on 8 envs in one batch
+    "sac": 5.0e-3,
+    "bc": 1.9e-6,  # per demonstration step and epoch
+    "study": 0.14,  # per workpiece, MuJoCo contact outcomes
     "study-model": 0.01,  # per workpiece, the tolerance model's outcomes (kinematic)
 }
 #: An inference-wrapped policy (π_φ*) costs this many times its policy's episodes.

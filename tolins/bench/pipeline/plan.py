@@ -76,10 +76,9 @@ class Plan:
         the earlier stages ``needs`` (the results of those that run as jobs come last)."""
         self.stages[stage.name] = stage
         if self.dry_run:
+            folder = self.cache.folder(stage.name, stage.config)
             finished = self.cache.finished(stage.name, stage.config)
-            usable = (
-                finished and self.cache.problem(self.cache.folder(stage.name, stage.config)) is None
-            )
+            usable = finished and self.cache.problem(folder) is None
         else:
             bad = self.cache.discard_bad(stage.name, stage.config)
             if bad is not None:

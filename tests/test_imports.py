@@ -28,10 +28,11 @@ _ROOT = Path(__file__).resolve().parents[1] / "tolins"
 #: Each top-level part of tolins and its layer. A file may import its own part and the
 #: parts of its layer or a lower one, never a higher one, at any depth.
 LAYERS: dict[str, int] = {
-    # leaf utilities: the paper's constants, atomic file writes, lists of names
+    # leaf utilities: the paper's constants, atomic file writes, lists of names, stop requests
     "tolins.paper": 0,
     "tolins.atomic": 0,
     "tolins.names": 0,
+    "tolins.stopping": 0,
     # specs, defects, the tolerance model (tolins.tolerance is its public name)
     "tolins.geometry": 1,
     "tolins.tolerance": 1,
@@ -239,6 +240,7 @@ def test_inference_imports_geometry_only(module: str) -> None:
     """``tolins.inference`` (its physics and adaptive helpers aside) needs no simulator."""
     loaded = _probe(module)
     allowed = ("tolins.geometry", "tolins.inference", "tolins.atomic", "tolins.names")
+    allowed += ("tolins.stopping",)
     outside = {
         name for name in _tolins(loaded) if name != "tolins" and not name.startswith(allowed)
     }

@@ -12,7 +12,7 @@ import pytest
 from tolins.bench.pipeline.executor import Job, LocalExecutor, critical_paths, failed_stage
 from tolins.policies import EXPERTS
 from tolins.rollouts import runner
-from tolins.rollouts.stopping import stop_requested
+from tolins.stopping import stop_requested
 
 _BARRIER = threading.Barrier(2, timeout=10)
 _LOG: list[str] = []

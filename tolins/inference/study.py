@@ -25,9 +25,11 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from collections.abc import Callable, Generator
-from concurrent.futures import ProcessPoolExecutor
+import multiprocessing
+import multiprocessing.pool
+from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,6 +41,7 @@ from tolins.inference.goal import DISCARD_THRESHOLD, centre_goals, next_goal
 from tolins.inference.history import History
 from tolins.inference.posterior import DefectModel
 from tolins.names import comma_separated
+from tolins.stopping import wait_unless_stopped
 
 #: The study's socket: 2*1, pins 0.3 mm, holes 0.5 mm, 5 mm apart.
 SOCKET = CircularSocket(2, 1, pin_radius=0.3, hole_radius=0.5, row_pitch=5.0)
@@ -226,11 +229,17 @@ def run_study(
         if len(part)
     ]
     rows, kind_rows = [], {kind: [] for kind in kinds}
+    pool = None
     if config.workers == 1:
         done, kind_done = map(_chunk, jobs), map(_kind_chunk, kind_jobs)
     else:
-        pool = ProcessPoolExecutor(config.workers)
-        done, kind_done = pool.map(_chunk, jobs), pool.map(_kind_chunk, kind_jobs)
+        # Spawned: a bench runs the study on a thread beside others, and forking a process
+        # with threads running is unsafe.
+        pool = multiprocessing.get_context("spawn").Pool(config.workers)
+        done, kind_done = (
+            _results(pool.imap(_chunk, jobs)),
+            _results(pool.imap(_kind_chunk, kind_jobs)),
+        )
     try:
         for chunk_rows in done:
             for row in chunk_rows:
@@ -240,8 +249,9 @@ def run_study(
         for (_, kind, _, _), chunk_rows in zip(kind_jobs, kind_done, strict=True):
             kind_rows[kind] += chunk_rows
     finally:
-        if config.workers != 1:
-            pool.shutdown()
+        if pool is not None:  # idle when all went well; else its chunks left are ended
+            pool.terminate()
+            pool.join()
     inside = pins_inside(SOCKET, offsets, np.zeros(3)).all(-1)
     possible = pins_inside(SOCKET, offsets, centre_goals(SOCKET, offsets)).all(-1)
     attempts = {m: np.array([row[m] for row in rows]) for m in config.methods}
@@ -256,6 +266,16 @@ def run_study(
         for kind in kinds
     }
     return StudyResult(config, float(inside.mean()), float(1 - possible.mean()), attempts, by_kind)
+
+
+def _results(results: multiprocessing.pool.IMapIterator) -> Iterator[Any]:
+    """The results of a pool's ``imap`` in order, raising
+    :class:`~tolins.stopping.Stopped` while waiting once a stop is requested."""
+    while True:
+        try:
+            yield wait_unless_stopped(results.next)
+        except StopIteration:
+            return
 
 
 def kind_workpieces(kind: str, samples: int, seed: int) -> list[CircularSocket]:

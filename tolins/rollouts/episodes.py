@@ -22,7 +22,7 @@ from tolins.envs.actions import check_action
 from tolins.envs.tasks import check_env_id
 from tolins.rollouts.collectors import Collector, Forces, Info, Outcome, Poses
 from tolins.rollouts.forces import ForceScores
-from tolins.rollouts.stopping import raise_if_stopped
+from tolins.stopping import raise_if_stopped
 
 Policy = Callable[[np.ndarray], np.ndarray]
 
@@ -155,7 +155,7 @@ def run_episode(
 ) -> Episode:
     """Run ``policy`` in ``env`` from ``reset(seed=seed)`` until the episode ends; its
     record, with what the ``collectors`` (fresh ones) kept
-    (:class:`~tolins.rollouts.stopping.Stopped` before a step once a stop is requested)."""
+    (:class:`~tolins.stopping.Stopped` before a step once a stop is requested)."""
     observation, info = env.reset(seed=seed)
     run = EpisodeRun(policy, env.unwrapped.settings, observation, info, collectors)
     while not run.done:

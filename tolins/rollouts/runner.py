@@ -8,7 +8,7 @@ as its episode ends (``reset_mask`` with the job's seed). Each slot's episode is
 :func:`~tolins.rollouts.episodes.run_episode`, and a job's episode is the one that loop
 gives in ``gymnasium.make(env_id)`` reset with its seed, bit for bit (the vector env's
 guarantee), so results depend neither on the number of slots nor on threads nor on the
-order of the jobs. A stop requested by :mod:`tolins.rollouts.stopping` ends the loop
+order of the jobs. A stop requested by :mod:`tolins.stopping` ends the loop
 before its next step.
 """
 
@@ -27,7 +27,7 @@ from tolins.physics.registry import taking
 from tolins.rollouts.collectors import Collector
 from tolins.rollouts.episodes import Episode, EpisodeRun, Policy
 from tolins.rollouts.infos import InfoRow
-from tolins.rollouts.stopping import raise_if_stopped
+from tolins.stopping import raise_if_stopped
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ def _run_in(
     env: InsertionVectorEnv, jobs: Sequence[Job], indices: list[int]
 ) -> Iterator[tuple[int, Episode]]:
     """Yield ``(job index, episode)`` for ``indices``, run in ``env``'s slots
-    (:class:`~tolins.rollouts.stopping.Stopped` before a step once a stop is requested)."""
+    (:class:`~tolins.stopping.Stopped` before a step once a stop is requested)."""
     queue = deque(indices)
     slots: list[_Slot | None] = [None] * env.num_envs
     observations = _start(env, jobs, queue, slots)

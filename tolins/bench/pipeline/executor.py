@@ -24,7 +24,7 @@ the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
 
 A job that raises stops the run: no more start, and locally the running ones stop at
-their next control step (:mod:`tolins.rollouts.stopping`; a process of their own is
+their next control step (:mod:`tolins.stopping`; a process of their own is
 ended), as on Ctrl-C; the exception is raised with the stage's name attached
 (:func:`failed_stage`, and a note in its traceback).
 """
@@ -45,7 +45,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tolins.rollouts.stopping import clear_stop, raise_if_stopped, request_stop
+from tolins.stopping import clear_stop, request_stop, wait_unless_stopped
 
 EXECUTORS = ("local", "ray")
 INSTALL_RAY = "pip install 'tolins[ray]'"
@@ -133,7 +133,7 @@ class LocalExecutor:
     ) -> dict[str, Any]:
         """Run ``jobs``; their results by name. If one raises or the run is interrupted,
         no more start and the running ones stop at their next control step
-        (:mod:`tolins.rollouts.stopping`; an ``own_process`` job's process is ended by
+        (:mod:`tolins.stopping`; an ``own_process`` job's process is ended by
         :meth:`close`), then the error is raised."""
         from tolins.learning.artefacts import single_threaded_torch
 
@@ -146,7 +146,8 @@ class LocalExecutor:
                 on_start(job)
             args = (*job.args, *[results[d] for d in job.deps])
             if job.own_process:
-                value, where = _result(self._process_pool().apply_async(_call_here, (job.fn, args)))
+                pending = self._process_pool().apply_async(_call_here, (job.fn, args))
+                value, where = wait_unless_stopped(pending.get)
             else:
                 value, where = job.fn(*args), _where()
             self.placement[job.name] = where
@@ -184,16 +185,6 @@ class LocalExecutor:
             self._processes.terminate()
             self._processes.join()
             self._processes = None
-
-
-def _result(pending: multiprocessing.pool.AsyncResult) -> Any:
-    """What a process of the pool returns for ``pending`` (its error raised), checking for a
-    stop request (:func:`~tolins.rollouts.stopping.raise_if_stopped`) twice a second."""
-    while True:
-        try:
-            return pending.get(timeout=0.5)
-        except multiprocessing.TimeoutError:
-            raise_if_stopped()
 
 
 class Schedule:

@@ -5,13 +5,19 @@
 The bench's local executor requests it when it is interrupted (Ctrl-C) or a stage fails,
 so that the stages running beside it end within a control step instead of running to
 their end; their finished work (stage folders, RS-GAIL's per-iteration checkpoints) is
-kept, as every file is written atomically.
+kept, as every file is written atomically. Work waiting on other processes (a deep-RL
+training's, the inference study's) waits through :func:`wait_unless_stopped`, and its
+owner ends those processes.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import threading
+from collections.abc import Callable
+from typing import TypeVar
 
+T = TypeVar("T")
 _requested = threading.Event()
 
 
@@ -38,3 +44,14 @@ def raise_if_stopped() -> None:
     """Raise :class:`Stopped` if a stop has been requested."""
     if _requested.is_set():
         raise Stopped("stopped on request (the run was interrupted or another stage failed)")
+
+
+def wait_unless_stopped(get: Callable[[float], T], every: float = 0.5) -> T:
+    """What ``get(timeout)`` returns (a result from another process: it raises
+    ``multiprocessing.TimeoutError`` while there is none yet), checking for a stop request
+    every ``every`` seconds meanwhile (:class:`Stopped`)."""
+    while True:
+        try:
+            return get(every)
+        except multiprocessing.TimeoutError:
+            raise_if_stopped()

@@ -8,8 +8,8 @@ as its episode ends (``reset_mask`` with the job's seed). Each slot's episode is
 :func:`~tolins.rollouts.episodes.run_episode`, and a job's episode is the one that loop
 gives in ``gymnasium.make(env_id)`` reset with its seed, bit for bit (the vector env's
 guarantee), so results depend neither on the number of slots nor on threads nor on the
-order of the jobs. A stop requested by :mod:`tolins.stopping` ends the loop
-before its next step.
+order of the jobs. A stop requested by :mod:`tolins.stopping` ends the loop before its
+next step.
 """
 
 from __future__ import annotations

@@ -24,9 +24,9 @@ the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
 
 A job that raises stops the run: no more start, and locally the running ones stop at
-their next control step (:mod:`tolins.stopping`; a process of their own is
-ended), as on Ctrl-C; the exception is raised with the stage's name attached
-(:func:`failed_stage`, and a note in its traceback).
+their next control step (:mod:`tolins.stopping`; a process of their own is ended), as on
+Ctrl-C; the exception is raised with the stage's name attached (:func:`failed_stage`, and
+a note in its traceback).
 """
 
 from __future__ import annotations

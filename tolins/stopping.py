@@ -1,6 +1,7 @@
-"""A request that this process's rollouts stop early: every episode loop of
-:mod:`tolins.rollouts.runner` raises :class:`Stopped` at its next control step once
-:func:`request_stop` was called, until :func:`clear_stop`.
+"""A request that this process's work stop early: both episode loops (the vector env's,
+:mod:`tolins.rollouts.runner`, and the single env's,
+:func:`tolins.rollouts.episodes.run_episode`) raise :class:`Stopped` at their next control
+step once :func:`request_stop` was called, until :func:`clear_stop`.
 
 The bench's local executor requests it when it is interrupted (Ctrl-C) or a stage fails,
 so that the stages running beside it end within a control step instead of running to
@@ -22,7 +23,7 @@ _requested = threading.Event()
 
 
 class Stopped(Exception):
-    """A rollout loop ended because a stop was requested (:func:`request_stop`)."""
+    """Work ended because a stop was requested (:func:`request_stop`)."""
 
 
 def request_stop() -> None:

@@ -98,6 +98,9 @@ def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
     many to run and their expected work, and that work spread over ``config.workers``."""
     from tolins.bench.pipeline.progress import KINDS, format_duration, stage_kind
 
+    def work(of: list[PlannedStage]) -> float:
+        return sum(stage.expected_s for stage in of)
+
     todo = [stage for stage in stages if not stage.finished]
     lines = [
         f"{len(stages)} stages in {config.out}: {len(stages) - len(todo)} finished, "
@@ -110,20 +113,15 @@ def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
         of_kind = [stage for stage in stages if stage_kind(stage.name) == kind]
         if of_kind:
             left = [stage for stage in of_kind if not stage.finished]
-            lines.append(f"| {kind} | {len(of_kind) - len(left)} | {len(left)} | {_work(left)} |")
-    lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {_work(todo)} |")
-    work = sum(stage.expected_s for stage in todo)
+            done = len(of_kind) - len(left)
+            lines.append(f"| {kind} | {done} | {len(left)} | {format_duration(work(left))} |")
+    total = work(todo)
+    lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {format_duration(total)} |")
     place = "cores" if config.executor == "local" else "Ray CPUs"
     lines += [
         "",
-        f"About {format_duration(work / config.workers)} on {config.workers} {place} "
+        f"About {format_duration(total / config.workers)} on {config.workers} {place} "
         "(--workers): each stage's budget at the speed per env step of an idle quick "
         "bench on 2 cores (tolins.bench.pipeline.progress.STEP_SECONDS). Nothing was run.",
     ]
     return "\n".join(lines)
-
-
-def _work(stages: list[PlannedStage]) -> str:
-    from tolins.bench.pipeline.progress import format_duration
-
-    return format_duration(sum(stage.expected_s for stage in stages))

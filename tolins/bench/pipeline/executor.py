@@ -332,7 +332,7 @@ class RayExecutor:
                     )
                     running[where] = job
                 done, _ = ray.wait(list(running), num_returns=1, timeout=1.0)
-                if started is not None and on_start is not None:
+                if started is not None:  # made only with an on_start
                     for name in started.get_nowait_batch(started.qsize()):
                         on_start(by_name[name])
                 for ref in done:

@@ -273,7 +273,7 @@ def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray)
 def test_tasks_start_as_cpus_free_up_the_costliest_chain_first(local_ray):
     executor = RayExecutor()
     executor.run([Stage(name, time.sleep, (0.5,)) for name in ("a", "b")])  # both workers up
-    jobs = [Stage(name, time.sleep, (1.5,)) for name in ("x", "y", "big")]
+    jobs = [Stage(name, time.sleep, (3.0,)) for name in ("x", "y", "big")]
     order = []
     executor.run(jobs, on_start=lambda job: order.append(job.name), costs={"big": 10.0})
     # 2 CPUs: "big" and "x" first, "y" once one of them has ended (submitted all at once,

@@ -320,5 +320,6 @@ def test_a_bench_run_shows_one_bar_over_its_stages(tmp_path, capsys):
     # no deep-RL row ran: results.md says where they are
     markdown = (out / "results.md").read_text()
     assert "## Deep RL from scratch against RS-GAIL at equal env steps" in markdown
-    assert "This run has no deep-RL row (`--rows`)" in markdown and "`reference:paper`" in markdown
+    assert "This run has no deep-RL row (`--rows`); these rows are `reference:paper`'s" in markdown
+    assert "| R1.1 | PPO (sparse) |" in markdown and "| R2.4 | SAC (dense) |" in markdown
     assert json.loads((out / "curves.json").read_text()) == {}

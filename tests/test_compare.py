@@ -3,8 +3,10 @@ command's errors."""
 
 from __future__ import annotations
 
+import gzip
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -19,9 +21,11 @@ from tolins.bench.table.claims import (
     check_claims,
 )
 from tolins.bench.table.compare import A_HIGHER, B_HIGHER, CONSISTENT, compare, format_comparison
-from tolins.bench.table.results import read_results
+from tolins.bench.table.results import SCHEMA, read_results
 from tolins.bench.table.statistics import EPISODES, ONE_SEED_MARGIN, SEEDS, equivalent, sign
 from tolins.cli import main
+
+DATA = Path(__file__).parent / "data"
 
 ROWS = "C2.1,C2.2,C2.3,C3.1,C3.2"
 
@@ -168,3 +172,23 @@ def test_a_missing_reference_is_a_one_line_error(capsys):
     err = _error(["compare", "reference:no-such-run", "reference:paper"], capsys)
     assert "reference:no-such-run: no such reference results" in err and "README.md" in err
     assert "no such reference" in _error(["compare", "reference:../..", "x"], capsys)
+
+
+def test_compare_reads_the_schema_of_tolins_0_3_against_todays(tmp_path, capsys):
+    """The paper reference tolins 0.3.0 shipped (schema 1, `-v1`, Table 1 only) against
+    today's (schema 3, `-v2`, with the deep-RL rows): the expert rows measure the same."""
+    old = tmp_path / "paper-0.3.0.json"
+    with gzip.open(DATA / "paper_results_tolins_0.3.0.json.gz", "rb") as packed:
+        old.write_bytes(packed.read())
+    document = read_results(old)
+    assert document["schema"] == "tolins.results/1" and document["tolins_version"] == "0.3.0"
+    assert read_results(reference_path("paper"))["schema"] == SCHEMA != document["schema"]
+    result = compare("reference:paper", str(old))
+    assert [row.row for row in result.rows] == list(document["rows"])
+    assert all(row.status == CONSISTENT for row in result.rows)
+    for expert in ("C1.1", "C2.1", "P1.1"):
+        row = next(r for r in result.rows if r.row == expert)
+        assert row.a["reward_per_episode"] == row.b["reward_per_episode"], expert
+    assert {r[:3] for r in result.only_a} == {"R1.", "R2."}
+    assert main(["compare", "reference:paper", str(old)]) == 0
+    assert "15 of 15 shared rows consistent" in capsys.readouterr().out

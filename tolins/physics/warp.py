@@ -7,9 +7,9 @@ simulator of tolins shares, :func:`~tolins.physics.servo.servo_control_step` (se
 set-points re-anchored ``act = qpos``, ``contact_checks`` chunks of physics steps, the
 summed pin touch force read after each for ``peak_force``; the wrench from the
 force/torque sensors), always on the contact step: the worlds step in lockstep. Physics
-steps run as a captured Warp graph (a CUDA graph on a GPU, Warp's replayed CPU graph on ``"cpu"``):
-on the CPU device a captured step is about 10× faster than launching its ~120 kernels
-from Python.
+steps run as a captured Warp graph (a CUDA graph on a GPU, Warp's replayed CPU graph on
+``"cpu"``): on the CPU device a captured step is about 10× faster than launching its ~120
+kernels from Python.
 
 How it differs from C MuJoCo (``docs/backends.md`` has the measured consequences): float32
 arithmetic; the solver tolerance is clamped to ≥ 1e-6 (ours is 1e-10); contacts and

@@ -21,9 +21,9 @@ P2.2 1.60) differ by training alone with a std of up to √2 × 2.38 = 3.37, and
 its 95 % bound (one trained row against an expert: 2 × 2.38 = 4.8). The deep-RL rows are
 not in it: their seeds learn or do not (R2.1, PPO on the dense reward, spreads by 9.47),
 so one seed of them decides nothing; the paper profile trains them on five. So an
-episode-level difference is called only when its whole episode-level CI lies beyond what retraining
-could plausibly undo; anything smaller (e.g. +0.8 ± 0.6) is inconclusive, however many
-standard errors it is.
+episode-level difference is called only when its whole episode-level CI lies beyond what
+retraining could plausibly undo; anything smaller (e.g. +0.8 ± 0.6) is inconclusive,
+however many standard errors it is.
 
 The resampling is rliable's (:class:`rliable.library.StratifiedBootstrap` and
 ``StratifiedIndependentBootstrap`` through ``get_interval_estimates``). Its metrics
@@ -223,8 +223,9 @@ def margin(interval: Interval, trained: int = 2) -> float:
 
 def training_spread(rows: Mapping[str, Mapping[str, Any]]) -> tuple[str, float]:
     """The row of ``rows`` (row id → ``results.json`` entry) whose per-seed mean reward
-    spreads most over training seeds, and that std (over seeds, the ± of results.md): how
-    :data:`TRAINING_SPREAD` is measured. ``ValueError`` without a row of ≥ 2 seeds."""
+    spreads most over training seeds, and that std (over seeds, the ± of results.md): on
+    ``reference:paper``'s Table 1 rows, :data:`TRAINING_SPREAD`. ``ValueError`` without a
+    row of ≥ 2 seeds."""
     spreads = {
         row: float(np.std(entry["reward_per_seed"]))
         for row, entry in rows.items()

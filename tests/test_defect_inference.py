@@ -5,11 +5,18 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 
-from tolins.geometry.tolerance import pins_inside
+from tolins.geometry.specs import CircularSocket
+from tolins.geometry.tolerance import moved_pins, pins_inside
 from tolins.inference.goal import next_goal
 from tolins.inference.history import History
-from tolins.inference.posterior import DefectModel, sample_defect_posterior, sample_posterior
+from tolins.inference.posterior import (
+    DefectModel,
+    defect_parts,
+    sample_defect_posterior,
+    sample_posterior,
+)
 from tolins.inference.report import format_kinds_markdown, format_markdown
 from tolins.inference.study import (
     DEFECT_MODEL,
@@ -113,6 +120,78 @@ def test_bent_model_is_unchanged_by_the_defect_model() -> None:
     only_bends = DefectModel(SIGMA)
     found = next_goal(SOCKET, history, SIGMA, np.random.default_rng(0), model=only_bends)
     assert found.blocked == 0.0 and found.expected_success > 0.5
+
+
+#: A grasp error's prior (x, y, yaw std: mm, mm, rad), as an env's ``grasp_error``.
+GRASP = (0.5, 0.5, 0.02)
+
+
+def grasped(error: np.ndarray) -> CircularSocket:
+    """The nominal workpiece held ``error`` ``[dx, dy, dyaw]`` off in the hand, as bends."""
+    latent = np.zeros((1, 3 * SOCKET.n_pins + 5))
+    latent[0, -3:] = error
+    offsets, _ = defect_parts(SOCKET, latent)
+    return dataclasses.replace(SOCKET, pin_offsets=tuple(map(tuple, offsets[0])))
+
+
+def test_a_grasp_error_moves_every_pin_as_the_part_held_off_in_the_hand() -> None:
+    """Pin i at ``R(dψ) h_i + (dx, dy)``: the part's rigid motion, with the pitch error too."""
+    error = np.array([0.3, -0.2, 0.04])
+    spec = grasped(error)
+    expected = moved_pins(SOCKET.hole_centers, error) - SOCKET.hole_centers
+    np.testing.assert_allclose(spec.offsets, expected, atol=1e-15)
+    # A pitch error scales the pins, which the grasp's yaw then turns with the part.
+    latent = np.zeros((1, 3 * SOCKET.n_pins + 5))
+    latent[0, 2 * SOCKET.n_pins : 2 * SOCKET.n_pins + 2] = 0.0, 0.1
+    latent[0, -3:] = error
+    offsets, burrs = defect_parts(SOCKET, latent)
+    pitched = SOCKET.hole_centers * [1.0, 1.1]
+    np.testing.assert_allclose(
+        offsets[0], moved_pins(pitched, error) - SOCKET.hole_centers, atol=1e-15
+    )
+    assert np.all(burrs == 0.0)
+    # Without a grasp error the latent has no grasp coordinates.
+    assert (
+        len(DefectModel(SIGMA).scales(2)) == 8
+        and len(DefectModel(SIGMA, grasp_sigma=GRASP).scales(2)) == 11
+    )
+
+
+def test_a_grasp_error_is_found_from_failed_attempts_alone() -> None:
+    """Outcomes only (no contact evidence): the grasp-error prior puts every pin's offset in
+    one common motion and searches it, so it inserts workpieces held off in the hand that
+    the bent-pin prior gives up on (it explains a failure by independent bends, under
+    which no goal is likely enough)."""
+    rng = np.random.default_rng(1)
+    errors = np.clip(rng.normal(0.0, 1.0, (24, 3)), -3.0, 3.0) * GRASP
+    errors = [
+        e for e in errors if not pins_inside(grasped(e), grasped(e).offsets, np.zeros(3)).all()
+    ]
+    assert len(errors) >= 20  # the nominal goal fails on these
+    grasp, bent = DefectModel(0.0, grasp_sigma=GRASP), DefectModel(GRASP[0])
+    found = {
+        name: [
+            infer(grasped(e), contact=False, model=model, seed=k)[0] > 0
+            for k, e in enumerate(errors)
+        ]
+        for name, model in (("grasp", grasp), ("bent", bent))
+    }
+    assert sum(found["grasp"]) >= 0.3 * len(errors)
+    assert sum(found["bent"]) <= 0.1 * len(errors)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"sigma": 0.0}, "something must move the pins"),
+        ({"sigma": 0.1, "grasp_sigma": (0.1, 0.1)}, "three stds"),
+        ({"sigma": 0.1, "grasp_sigma": (0.1, -0.1, 0.0)}, "three stds"),
+        ({"sigma": -0.1}, "sigma=-0.1; allowed: ≥ 0"),
+    ],
+)
+def test_defect_model_refuses_bad_priors(options, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        DefectModel(**options)
 
 
 def test_study_reports_each_kind() -> None:

@@ -72,9 +72,11 @@ class TaskSettings:
             episode from independent normals clipped at 3 std (after the physics, before
             the pose; the draw in the reset's ``info["grasp_error"]``), or ``None`` (the
             part where the robot believes it). The closing fingers centre the part across
-            the pads and square it to them, so what stays is mostly the offset along the
-            pads: the part's true offset is ``info["pose"] - info["sensed_pose"]``. A
-            robot's only; each std at most :data:`MAX_GRASP_ERROR_STD`.
+            the pads and square it to them, pushing a part off across them along the
+            pads (up to about 3.4 times the std across, docs/robot.md), so what stays is
+            an offset along the pads that is not the draw's: the part's true offset is
+            ``info["pose"] - info["sensed_pose"]``. A robot's only; each std at most
+            :data:`MAX_GRASP_ERROR_STD`.
     """
 
     socket: SocketSpec

@@ -2,8 +2,9 @@
 
 The paper's section "Probabilistic Inference": a particle posterior over the pin offsets
 (:mod:`.posterior`), CMA-ES over the next goal (:mod:`.goal`) and the numerical study
-(:mod:`.study`). Beside the bent-pin prior, :class:`DefectModel` adds pitch error, burrs
-and a blocked hole, and the goal search's result says when a workpiece is not insertable.
+(:mod:`.study`). Beside the bent-pin prior, :class:`DefectModel` adds pitch error, burrs,
+a blocked hole and a grasp error (a common motion of every pin), and the goal search's
+result says when a workpiece is not insertable.
 Imports :mod:`tolins.geometry` only.
 """
 

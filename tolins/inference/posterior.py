@@ -232,55 +232,86 @@ def _log_target(
 
 @dataclass(frozen=True)
 class DefectModel:
-    """The prior of :func:`sample_defect_posterior`: bent pins, pitch error, burrs and a
-    blocked hole together (the defect kinds of :mod:`tolins.geometry.defects`).
+    """The prior of :func:`sample_defect_posterior`: bent pins, pitch error, burrs, a
+    blocked hole and a grasp error together (the defect kinds of
+    :mod:`tolins.geometry.defects`, and a part held off in a robot's hand).
 
-    A workpiece's latent ``z = (bend (n_pins, 2), δ (2,), u (n_pins,))`` is Gaussian:
-    ``bend ~ N(0, sigma²)``, the pitch error ``δ = (col, row) scale - 1 ~ N(0,
-    pitch_sigma²)``, ``u ~ N(0, burr_sigma²)`` with burr ``|u|``. Pin ``i`` sits at
-    ``h_i (1 + δ) + bend_i`` (the effective offset ``h_i δ + bend_i``) with clearance
-    ``c - |u_i|``. Besides, with prior probability ``blocked_prior`` one hole (uniform) is
-    plugged: its pin never goes in, every attempt fails and it is blocked at every contact.
+    A workpiece's latent ``z = (bend (n_pins, 2), δ (2,), u (n_pins,)[, g (3,)])`` is
+    Gaussian: ``bend ~ N(0, sigma²)``, the pitch error ``δ = (col, row) scale - 1 ~ N(0,
+    pitch_sigma²)``, ``u ~ N(0, burr_sigma²)`` with burr ``|u|``, and, only when
+    ``grasp_sigma`` is not all zero, the grasp error ``g = (dx, dy, dψ) ~ N(0,
+    diag(grasp_sigma²))``: the part that far off (in its own frame) from where the robot
+    believes it, which moves every pin alike. Pin ``i`` (nominally at ``h_i``) sits at
+    ``R(dψ) h_i (1 + δ) + (dx, dy) + bend_i``, with clearance ``c - |u_i|``. Besides, with
+    prior probability ``blocked_prior`` one hole (uniform) is plugged: its pin never goes
+    in, every attempt fails and it is blocked at every contact.
 
     Attributes:
-        sigma: Bend std per pin and axis (mm).
+        sigma: Bend std per pin and axis (mm; 0: straight pins).
         pitch_sigma: Relative pitch error std per axis (0: none).
         burr_sigma: Burr std (mm; 0: none).
         blocked_prior: Prior probability of a blocked hole (0: never).
+        grasp_sigma: Grasp error std ``(x, y, yaw)`` (mm, mm, rad; the part's frame, as an
+            env's ``grasp_error``); all zero: none (no grasp coordinates in ``z``).
     """
 
     sigma: float
     pitch_sigma: float = 0.0
     burr_sigma: float = 0.0
     blocked_prior: float = 0.0
+    grasp_sigma: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
-        if not self.sigma > 0:
-            raise ValueError(f"sigma={self.sigma!r}; allowed: > 0")
-        for name in ("pitch_sigma", "burr_sigma"):
+        for name in ("sigma", "pitch_sigma", "burr_sigma"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"{name}={getattr(self, name)!r}; allowed: ≥ 0")
         if not 0.0 <= self.blocked_prior < 1.0:
             raise ValueError(f"blocked_prior={self.blocked_prior!r}; allowed: 0 ≤ value < 1")
+        grasp = np.asarray(self.grasp_sigma, dtype=float)
+        if grasp.shape != (3,) or not np.all(grasp >= 0):
+            raise ValueError(
+                f"grasp_sigma={self.grasp_sigma!r}; allowed: three stds (x, y, yaw) ≥ 0"
+            )
+        object.__setattr__(self, "grasp_sigma", tuple(float(v) for v in grasp))
+        if not (self.sigma > 0 or self.grasps):
+            raise ValueError(
+                f"sigma={self.sigma!r} with grasp_sigma={self.grasp_sigma!r}; allowed: "
+                "sigma > 0, or a grasp_sigma above 0 (something must move the pins)"
+            )
+
+    @property
+    def grasps(self) -> bool:
+        """Whether the latent holds a grasp error (``grasp_sigma`` not all zero)."""
+        return any(v > 0 for v in self.grasp_sigma)
 
     def scales(self, n_pins: int) -> np.ndarray:
-        """Prior std of each latent coordinate ``(D,)``, ``D = 3 n_pins + 2`` (0: fixed)."""
-        return np.concatenate(
-            [
-                np.full(2 * n_pins, self.sigma),
-                np.full(2, self.pitch_sigma),
-                np.full(n_pins, self.burr_sigma),
-            ]
-        )
+        """Prior std of each latent coordinate ``(D,)``, ``D = 3 n_pins + 2`` (``+ 3`` with a
+        grasp error; 0: fixed)."""
+        parts = [
+            np.full(2 * n_pins, self.sigma),
+            np.full(2, self.pitch_sigma),
+            np.full(n_pins, self.burr_sigma),
+        ]
+        return np.concatenate(parts + [np.asarray(self.grasp_sigma)] * self.grasps)
 
 
 def defect_parts(spec: CircularSocket, latent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Effective offsets ``(N, n_pins, 2)`` (bend plus pitch error) and burrs ``(N, n_pins)``
-    of latent samples ``(N, 3 n_pins + 2)`` (:class:`DefectModel`)."""
+    """Effective offsets ``(N, n_pins, 2)`` (bend, pitch error and any grasp error) and
+    burrs ``(N, n_pins)`` of latent samples ``(N, 3 n_pins + 2)``, or ``(N, 3 n_pins + 5)``
+    with a grasp error (:class:`DefectModel`)."""
     n = spec.n_pins
     bend = latent[:, : 2 * n].reshape(-1, n, 2)
     pitch = latent[:, 2 * n : 2 * n + 2]
-    return bend + spec.hole_centers * pitch[:, None, :], np.abs(latent[:, 2 * n + 2 :])
+    offsets = bend + spec.hole_centers * pitch[:, None, :]
+    if latent.shape[1] == 3 * n + 5:
+        dx, dy, turn = (latent[:, 3 * n + 2 + k, None] for k in range(3))
+        pins = spec.hole_centers[None] + spec.hole_centers * pitch[:, None, :]
+        c, s = np.cos(turn) - 1.0, np.sin(turn)
+        offsets = offsets + np.stack(
+            [c * pins[..., 0] - s * pins[..., 1] + dx, s * pins[..., 0] + c * pins[..., 1] + dy],
+            axis=-1,
+        )
+    return offsets, np.abs(latent[:, 2 * n + 2 : 3 * n + 2])
 
 
 def defect_log_likelihood(

@@ -26,8 +26,8 @@ KEY = "robot"
 #: The Panda's 2*2.
 ROBOT_ENV = bench_id("Circle2x2Panda")
 #: The grasp error's std ``[x, y, yaw]`` (mm, mm, rad, the hand's frame): about one
-#: clearance along the pads, where the closing fingers leave most of it (across the pads
-#: they centre the part; docs/robot.md).
+#: clearance along the pads (across them the closing fingers centre the part, pushing it
+#: along the pads by 0.2 mm on average; docs/robot.md).
 GRASP_ERROR = (0.2, 0.2, 0.02)
 
 

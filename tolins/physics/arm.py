@@ -108,24 +108,26 @@ class Arm:
         self.flange = model.site(PREFIX + FLANGE).id
         self.hand_mass = float(model.body_subtreemass[model.body(PREFIX + HAND).id])
         self.wrist_sensors = [model.sensor(name).adr[0] for name in (WRIST_FORCE, WRIST_TORQUE)]
-        self._jp, self._jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+        self._jac = np.zeros((6, model.nv))  # translation rows, then rotation rows
         self._mass = np.zeros((model.nv, model.nv))
         self._block = np.ix_(self.dof, self.dof)
+        self._identity = np.eye(len(self.dof))
 
     def error(self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """``[position error (mm), rotation error (rad)]`` of the grip site to ``pos``, ``rot``."""
         # Σᵢ cᵢ × rᵢ / 2 over the columns of the current and target frames: the vee of
         # the skew part of R* Rᵀ.
         turn = rot @ data.site_xmat[self.site].reshape(3, 3).T
-        spin = 0.5 * np.array(
-            [turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]]
-        )
-        return np.r_[pos - data.site_xpos[self.site], spin]
+        error = np.empty(6)
+        error[:3] = pos - data.site_xpos[self.site]
+        error[3:] = turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]
+        error[3:] *= 0.5
+        return error
 
     def jacobian(self, data: mujoco.MjData) -> np.ndarray:
         """The grip site's ``(6, 7)`` Jacobian over the arm's joints (mm and rad)."""
-        mujoco.mj_jacSite(self.model, data, self._jp, self._jr, self.site)
-        return np.vstack([self._jp[:, self.dof], self._jr[:, self.dof]])
+        mujoco.mj_jacSite(self.model, data, self._jac[:3], self._jac[3:], self.site)
+        return self._jac[:, self.dof]
 
     def solve_ik(
         self, data: mujoco.MjData, pos: np.ndarray, rot: np.ndarray, iterations: int = 300
@@ -203,9 +205,10 @@ class Arm:
         pull[:, :3] = np.clip(pull[:, :3], -most, most)
         spring = np.einsum("nij,nj->ni", task, pull)
         damper = np.einsum("nij,nj->ni", task, gains.damping * (twist - velocity))
-        held = np.r_[-payload * GRAVITY, np.zeros(3)]
+        held = np.zeros(6)
+        held[:3] = -payload * GRAVITY
         consistent = inverse @ jac_t @ task
-        null = np.eye(len(self.dof)) - jac_t @ consistent.transpose(0, 2, 1)
+        null = self._identity - jac_t @ consistent.transpose(0, 2, 1)
         rate = gains.null
         hold = np.einsum("nij,nj->ni", mass, rate * (posture - q) - 2.0 * np.sqrt(rate) * qdot)
         tau = (

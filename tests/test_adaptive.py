@@ -6,12 +6,14 @@ import dataclasses
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 import tolins  # noqa: F401  (registers the envs)
 from tolins.envs.insertion_env import InsertionEnv
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import pins_inside
 from tolins.inference.adaptive import InferenceGuidedPolicy
+from tolins.inference.posterior import DefectModel
 from tolins.policies import SafeExpert
 from tolins.rollouts.episodes import run_episode
 
@@ -83,3 +85,19 @@ def test_defect_model_reports_a_blocked_hole_not_insertable_and_inserts_the_othe
         assert run_episode(env, wrapper, seed=0).success == inserts
         assert wrapper.not_insertable == (not inserts)
         assert wrapper.replans < wrapper.max_replans
+
+
+def test_a_grasp_error_prior_needs_no_pin_sigma_and_finds_a_part_held_off() -> None:
+    """Both pins 0.3 mm off in x, as a part held off in a robot's hand: the grasp-error
+    prior (a common offset of every pin, no bends) moves the goal with it and inserts."""
+    held_off = dataclasses.replace(NOMINAL, pin_offsets=np.array([[0.3, 0.0], [0.3, 0.0]]))
+    env = InsertionEnv(held_off, measurement_noise=0.0)
+    assert env.defect_sigma is None
+    with pytest.raises(ValueError, match="or a model"):
+        InferenceGuidedPolicy(SafeExpert(), env, spec=NOMINAL)
+    model = DefectModel(0.0, grasp_sigma=(0.3, 0.3, 0.01))
+    wrapper = InferenceGuidedPolicy(SafeExpert(), env, spec=NOMINAL, model=model)
+    wrapper.reset(0)
+    episode = run_episode(env, wrapper, seed=0)
+    assert episode.success and wrapper.replans >= 1
+    assert abs(wrapper.goals[-1][0] + 0.3) < NOMINAL.clearance  # the goal moved with the part

@@ -53,7 +53,8 @@ class InferenceGuidedPolicy:
         env: The env it acts in (wrapped or not); its ``unwrapped.goal`` is moved.
         spec: The nominal socket the inference starts from; default the env's
             ``nominal_socket``.
-        sigma: Prior std of each pin's offset (mm); default the env's ``defect_sigma``.
+        sigma: Prior std of each pin's offset (mm) of the bent-pin prior; default the env's
+            ``defect_sigma``. Not needed with ``model``, which holds its own prior.
         contact: Use the per-pin touch sensors and touch points as evidence (MuJoCo
             backend only).
         surface_tol: ``|ẑ|`` (mm) up to which the pins count as on the board top.
@@ -64,9 +65,9 @@ class InferenceGuidedPolicy:
         max_replans: Re-plans per episode at most.
         n_samples: Posterior samples.
         model: Infer with the defect model (:class:`~tolins.inference.posterior.DefectModel`:
-            bends, pitch error, burrs, a blocked hole) instead of the bent-pin prior; then
-            the wrapper stops re-planning once a goal search says the workpiece is not
-            insertable (:attr:`not_insertable`).
+            bends, pitch error, burrs, a blocked hole, a grasp error) instead of the bent-pin
+            prior; then the wrapper stops re-planning once a goal search says the workpiece
+            is not insertable (:attr:`not_insertable`).
     """
 
     def __init__(
@@ -89,9 +90,11 @@ class InferenceGuidedPolicy:
         self.env = env.unwrapped
         self.spec = self.env.nominal_socket if spec is None else spec
         sigma = self.env.defect_sigma if sigma is None else sigma
-        if sigma is None or not sigma > 0:
-            raise ValueError(f"sigma={sigma!r}; allowed: > 0 (or an env with defect_sigma)")
-        self.sigma = float(sigma)
+        if model is None and (sigma is None or not sigma > 0):
+            raise ValueError(
+                f"sigma={sigma!r}; allowed: > 0 (or an env with defect_sigma, or a model)"
+            )
+        self.sigma = float("nan") if sigma is None else float(sigma)
         self.contact = bool(contact)
         self.surface_tol = float(surface_tol)
         self.lift_steps = int(lift_steps)

@@ -20,7 +20,9 @@ beside the default, to see what a change of the law would buy before any is made
 stiffness doubled / halved, the damping still critical), ``down2`` / ``down_half`` (the
 downward force limit doubled / halved: 10 N, 2.5 N), and ``noslip`` (the default gains with
 MuJoCo's no-slip solver: friction without the soft constraints' creep, so that the part
-does not slide in the hand). ``--horizon`` (the paper's 40 control steps by default) gives
+does not slide in the hand), and ``firm_pads`` (the pads' contacts with the handle alone
+stiffer, :func:`firm_pads_world`: a grip that barely creeps, everything else as the ids
+have it). ``--horizon`` (the paper's 40 control steps by default) gives
 both bodies more time.
 """
 
@@ -35,7 +37,9 @@ import gymnasium as gym
 import numpy as np
 
 import tolins  # noqa: F401  (registers the ids)
+from tolins.mjcf.panda import GRIP_FRICTION, PREFIX, panda_world
 from tolins.paper import HORIZON
+from tolins.physics import panda as panda_physics
 from tolins.physics.arm import Gains
 from tolins.physics.panda import PandaBackend
 from tolins.policies import EXPERTS
@@ -60,9 +64,30 @@ VARIANTS = {
         DEFAULT, force_limit=(*DEFAULT.force_limit[:2], 0.5 * DEFAULT.force_limit[2])
     ),
 }
+#: The ``firm_pads`` variant's impedance of the pads' contacts with the handle, from the
+#: first µm of penetration (the task's contacts ramp from 0.99 to 0.999 over 0.01 mm): the
+#: friction that holds the part yields about ten times less.
+FIRM_PAD_IMPEDANCE = 0.999
 #: The ``noslip`` variant's iterations of MuJoCo's no-slip solver (the part cannot creep
 #: in the hand, nor the pins on the board: every contact's friction holds while it can).
 NOSLIP_ITERATIONS = 10
+
+
+def firm_pads_world(socket, **kwargs):
+    """:func:`~tolins.mjcf.panda.panda_world` with the pads' contacts on the handle as
+    explicit pairs of :data:`FIRM_PAD_IMPEDANCE` (a grip that barely creeps; the pins'
+    contacts on the board as the ids have them)."""
+    world = panda_world(socket, **kwargs)
+    slide, spin, roll = GRIP_FRICTION
+    for side in ("left", "right"):
+        pad = world.geom(f"{PREFIX}panda0_{side}finger_pad")
+        pad.contype = pad.conaffinity = 0
+        pair = world.add_pair(geomname1=pad.name, geomname2="handle", condim=3)
+        pair.friction = [slide, slide, spin, roll, roll]
+        pair.solref = pad.solref
+        pair.solimp = [FIRM_PAD_IMPEDANCE, FIRM_PAD_IMPEDANCE, *pad.solimp[2:]]
+        pair.margin = pair.gap = 0.0
+    return world
 
 
 def episodes(
@@ -73,7 +98,13 @@ def episodes(
     env = gym.make(env_id, horizon=horizon).unwrapped
     if variant is not None and variant != "default":
         gains = VARIANTS.get(variant, DEFAULT)
-        env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, gains=gains)
+        # The candidate grip has no option on the ids: the world builder is swapped while
+        # the backend compiles (the pool's workers run one job after another).
+        panda_physics.panda_world = firm_pads_world if variant == "firm_pads" else panda_world
+        try:
+            env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, gains=gains)
+        finally:
+            panda_physics.panda_world = panda_world
         if variant == "noslip":
             env.backend.model.opt.noslip_iterations = NOSLIP_ITERATIONS
     success, steps, ending = [], [], []
@@ -122,7 +153,9 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--experts", default="efficient,safe")
     parser.add_argument("--envs", default="Circle2x2Fit50,Circle2x8Fit50,SquareFit50")
-    parser.add_argument("--variants", default="default", help=f"of {', '.join(VARIANTS)}, noslip")
+    parser.add_argument(
+        "--variants", default="default", help=f"of {', '.join(VARIANTS)}, noslip, firm_pads"
+    )
     parser.add_argument("--horizon", type=int, default=HORIZON, help="control steps")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()

@@ -292,7 +292,9 @@ class DefectModel:
             np.full(2, self.pitch_sigma),
             np.full(n_pins, self.burr_sigma),
         ]
-        return np.concatenate(parts + [np.asarray(self.grasp_sigma)] * self.grasps)
+        if self.grasps:
+            parts.append(np.asarray(self.grasp_sigma))
+        return np.concatenate(parts)
 
 
 def defect_parts(spec: CircularSocket, latent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

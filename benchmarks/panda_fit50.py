@@ -43,6 +43,8 @@ from tolins.physics import panda as panda_physics
 from tolins.physics.arm import Gains
 from tolins.physics.panda import PandaBackend
 from tolins.policies import EXPERTS
+from tolins.rollouts.collectors import Poses
+from tolins.rollouts.episodes import run_episode
 
 DEFAULT = Gains()
 VARIANTS = {
@@ -110,20 +112,15 @@ def episodes(
     success, steps, ending = [], [], []
     began = time.perf_counter()
     for seed in seeds:
-        policy = EXPERTS[expert]()
-        observation, info = env.reset(seed=seed)
-        done = False
-        while not done:
-            observation, _, terminated, truncated, info = env.step(policy(observation))
-            done = terminated or truncated or "error" in info
-        success.append(bool(info["success"]))
-        steps.append(int(info["step"]))
-        if "error" in info:
+        episode = run_episode(env, EXPERTS[expert](), seed, (Poses(),))
+        success.append(episode.success)
+        steps.append(episode.steps)
+        if episode.error is not None:
             ending.append("fault")
-        elif info["success"]:
+        elif episode.success:
             ending.append("inserted")
         else:
-            ending.append("partly in" if info["pose"][3] < -0.01 else "on the board")
+            ending.append("partly in" if episode.poses[-1][3] < -0.01 else "on the board")
     return {
         "success": np.array(success),
         "steps": np.array(steps),

@@ -37,6 +37,7 @@ import numpy as np
 import tolins  # noqa: F401  (registers the ids)
 from tolins.inference.adaptive import InferenceGuidedPolicy
 from tolins.inference.posterior import DefectModel
+from tolins.paper import HORIZON
 from tolins.policies import SafeExpert
 
 ENV = "tolins/Circle2x2Panda-v2"
@@ -107,7 +108,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=30)
     parser.add_argument("--calibration", type=int, default=50, help="resets for the prior")
-    parser.add_argument("--horizon", type=int, default=40, help="control steps per episode")
+    parser.add_argument("--horizon", type=int, default=HORIZON, help="control steps per episode")
     parser.add_argument(
         "--std", type=float, nargs="+", default=[0.5, 1.0], help="grasp error std (mm)"
     )

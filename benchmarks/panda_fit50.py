@@ -18,12 +18,17 @@ board or partly in; a fault), and the mean steps of its successes.
 beside the default, to see what a change of the law would buy before any is made:
 ``side2`` (the sideways spring force limit doubled, 40 N), ``stiff2`` / ``soft2`` (the
 stiffness doubled / halved, the damping still critical), ``down2`` / ``down_half`` (the
-downward force limit doubled / halved: 10 N, 2.5 N), and ``noslip`` (the default gains with
-MuJoCo's no-slip solver: friction without the soft constraints' creep, so that the part
-does not slide in the hand), and ``firm_pads`` (the pads' contacts with the handle alone
-stiffer, :func:`firm_pads_world`: a grip that barely creeps, everything else as the ids
-have it). ``--horizon`` (the paper's 40 control steps by default) gives
-both bodies more time.
+downward force limit doubled / halved: 10 N, 2.5 N), ``xy4`` / ``xy8`` / ``xy16`` (the
+stiffness along x and y alone 4, 8 or 16 times; over the grip's task inertia, 7.4 kg
+along x and 5.7 kg along y at a reset over the 2*2, the default is 148 and 113 N/mm, the
+free body's servos 200 N/mm), ``tilt4`` (the stiffness about x
+and y alone four times: the hand tilts less under the pins' drag); and two that change the
+model: ``noslip`` (the default gains with MuJoCo's no-slip solver: friction without the
+soft constraints' creep, so that the part does not slide in the hand) and ``firm_pads``
+(the pads' contacts with the handle alone stiffer, :func:`firm_pads_world`: a grip that
+barely creeps, everything else as the ids have it). Gains and a model change together:
+``xy8+firm_pads``. ``--horizon`` (the paper's 40 control steps by default) gives both
+bodies more time.
 """
 
 from __future__ import annotations
@@ -47,6 +52,15 @@ from tolins.rollouts.collectors import Poses
 from tolins.rollouts.episodes import run_episode
 
 DEFAULT = Gains()
+
+
+def stiffer(gains: Gains, axes: tuple[int, ...], factor: float) -> Gains:
+    """``gains`` with the stiffness of task ``axes`` (x, y, z, then rotations) times
+    ``factor``, the damping still critical."""
+    stiffness = [factor * k if axis in axes else k for axis, k in enumerate(gains.stiffness)]
+    return dataclasses.replace(gains, stiffness=tuple(stiffness))
+
+
 VARIANTS = {
     "default": DEFAULT,
     "side2": dataclasses.replace(
@@ -65,7 +79,13 @@ VARIANTS = {
     "down_half": dataclasses.replace(
         DEFAULT, force_limit=(*DEFAULT.force_limit[:2], 0.5 * DEFAULT.force_limit[2])
     ),
+    "xy4": stiffer(DEFAULT, (0, 1), 4.0),
+    "xy8": stiffer(DEFAULT, (0, 1), 8.0),
+    "xy16": stiffer(DEFAULT, (0, 1), 16.0),
+    "tilt4": stiffer(DEFAULT, (3, 4), 4.0),
 }
+#: The variants that change the model, not the gains.
+MODEL_VARIANTS = ("noslip", "firm_pads")
 #: The ``firm_pads`` variant's impedance of the pads' contacts with the handle, from the
 #: first µm of penetration (the task's contacts ramp from 0.99 to 0.999 over 0.01 mm): the
 #: friction that holds the part yields about ten times less.
@@ -99,15 +119,18 @@ def episodes(
     gains or grip, ``None``: the free body)."""
     env = gym.make(env_id, horizon=horizon).unwrapped
     if variant is not None and variant != "default":
-        gains = VARIANTS.get(variant, DEFAULT)
+        name, _, model_change = variant.partition("+")
+        if name in MODEL_VARIANTS:
+            name, model_change = "default", name
+        gains = VARIANTS[name]
         # The candidate grip has no option on the ids: the world builder is swapped while
         # the backend compiles (the pool's workers run one job after another).
-        panda_physics.panda_world = firm_pads_world if variant == "firm_pads" else panda_world
+        panda_physics.panda_world = firm_pads_world if model_change == "firm_pads" else panda_world
         try:
             env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, gains=gains)
         finally:
             panda_physics.panda_world = panda_world
-        if variant == "noslip":
+        if model_change == "noslip":
             env.backend.model.opt.noslip_iterations = NOSLIP_ITERATIONS
     success, steps, ending = [], [], []
     began = time.perf_counter()
@@ -151,13 +174,25 @@ def main() -> None:
     parser.add_argument("--experts", default="efficient,safe")
     parser.add_argument("--envs", default="Circle2x2Fit50,Circle2x8Fit50,SquareFit50")
     parser.add_argument(
-        "--variants", default="default", help=f"of {', '.join(VARIANTS)}, noslip, firm_pads"
+        "--variants",
+        default="default",
+        help=f"of {', '.join(VARIANTS)}, {', '.join(MODEL_VARIANTS)} (gains+model change too)",
     )
     parser.add_argument("--horizon", type=int, default=HORIZON, help="control steps")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
     seeds = range(args.episodes)
     variants = args.variants.split(",")
+    for variant in variants:
+        name, _, model_change = variant.partition("+")
+        if (name not in VARIANTS and name not in MODEL_VARIANTS) or model_change not in (
+            "",
+            *MODEL_VARIANTS,
+        ):
+            parser.error(
+                f"--variants: {variant!r}; allowed: one of {', '.join(VARIANTS)}, "
+                f"{', '.join(MODEL_VARIANTS)}, or gains+{'|'.join(MODEL_VARIANTS)}"
+            )
     jobs = {
         (name, expert, variant): (
             f"tolins/{name}{'' if variant is None else 'Panda'}-v2",

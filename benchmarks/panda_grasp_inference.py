@@ -74,7 +74,7 @@ def run(
     policy = InferenceGuidedPolicy(
         SafeExpert(),
         env,
-        sigma=max(std, 0.05),
+        sigma=None if model is not None else max(std, 0.05),  # the grasp model holds its own prior
         contact=False,
         inference=method != "retry",
         model=model,

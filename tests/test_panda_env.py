@@ -11,31 +11,55 @@ from rrd_tables import read_tables
 import tolins
 from tolins.envs import InsertionEnv
 from tolins.envs.tasks import ROBOT_TASKS, TASKS, env_ids, task_of
+from tolins.mjcf.panda import FIRM_GRIP_IMPEDANCE
+from tolins.physics.arm import SIDEWAYS_STIFFNESS, Gains
 from tolins.physics.panda import DROPPED, update_plan
 from tolins.policies import SafeExpert
 from tolins.record.arm import arm_drawing
 from tolins.record.recorder import RerunRecorder
 
 PANDA = "tolins/Circle2x2Panda-v2"
+#: The Panda's newest version: a firm grip, and a law stiff sideways.
+PANDA_V3 = "tolins/Circle2x2Panda-v3"
 QUIET = {"measurement_noise": 0.0}
 
 
-@pytest.fixture(scope="module")
-def env() -> InsertionEnv:
-    return gym.make(PANDA, **QUIET).unwrapped
+@pytest.fixture(scope="module", params=[PANDA, PANDA_V3])
+def env(request) -> InsertionEnv:
+    return gym.make(request.param, **QUIET).unwrapped
 
 
-def test_every_paper_workpiece_and_50um_grade_has_a_panda_id_on_v2_only() -> None:
+def test_every_paper_workpiece_and_50um_grade_has_panda_ids_on_v2_and_v3_only() -> None:
     names = [task.name for task in ROBOT_TASKS]
     assert names[: len(TASKS)] == [f"{task.name}Panda" for task in TASKS]
     assert {"Circle2x2Fit50Panda", "SquareFit50Panda", "HexagonFit50Panda"} <= set(names)
     for task in ROBOT_TASKS:
         assert "robot" in task.tags and task.robot == "panda"
-        assert task.gym_id_of(2) in env_ids() and task.gym_id_of(1) not in env_ids()
-        assert task_of(task.gym_id_of(2)) is task
-        assert gym.spec(task.gym_id_of(2)).kwargs["robot"] == "panda"
+        assert task.gym_id_of(1) not in env_ids()
+        for version in (2, 3):
+            assert task.gym_id_of(version) in env_ids()
+            assert task_of(task.gym_id_of(version)) is task
+            spec = gym.spec(task.gym_id_of(version))
+            assert spec.kwargs["robot"] == "panda" and spec.kwargs["physics_version"] == version
     with pytest.raises(ValueError, match="not a preset id"):
         task_of("tolins/Circle2x2Panda-v1")
+    # The free body has no version 3.
+    assert "tolins/Circle2x2-v3" not in env_ids() and "tolins/Insert-v3" not in env_ids()
+
+
+def test_v3_grips_firmly_and_is_stiff_sideways_where_v2_is_unchanged() -> None:
+    v2, v3 = (gym.make(i).unwrapped.backend for i in (PANDA, PANDA_V3))
+    assert v2.model.npair == 0 and v3.model.npair == 2  # the pads on the handle
+    model = v3.model
+    pairs = [
+        {model.geom(int(a)).name, model.geom(int(b)).name}
+        for a, b in zip(model.pair_geom1, model.pair_geom2, strict=True)
+    ]
+    assert pairs == [{"handle", f"panda/panda0_{side}finger_pad"} for side in ("left", "right")]
+    np.testing.assert_array_equal(v3.model.pair_solimp[:, :2], FIRM_GRIP_IMPEDANCE)
+    assert v2._batch.arm.gains == Gains()
+    stiffness = v3._batch.arm.gains.stiffness
+    assert stiffness == (SIDEWAYS_STIFFNESS, SIDEWAYS_STIFFNESS, *Gains().stiffness[2:])
 
 
 def test_check_env_passes_on_a_panda_id(env: InsertionEnv) -> None:
@@ -109,15 +133,20 @@ def test_a_grasp_error_is_drawn_per_episode_off_by_default_and_ground_truth_in_i
         ({"grasp_error": 0.1}, "grasp_error needs a robot"),
         ({"robot": "panda", "grasp_error": [2.0, 0, 0]}, "grasp_error=.* is out of range"),
         ({"robot": "panda", "defects": ("blocked", None)}, "not supported on .*robot='panda'"),
+        ({"physics_version": 3}, "allowed with robot='free': physics_version 1, 2"),
+        (
+            {"robot": "panda", "physics_version": 3, "randomization": {"servo_gain": (1, 3)}},
+            "unstable beyond 2 times its stiffness; allowed: an upper bound of at most 2",
+        ),
     ],
 )
 def test_bad_robot_settings_raise_naming_what_is_allowed(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
-        InsertionEnv(tolins.CircularSocket(2, 2), physics_version=2, **kwargs)
+        InsertionEnv(tolins.CircularSocket(2, 2), **{"physics_version": 2, **kwargs})
 
 
 def test_the_vector_env_steps_each_panda_as_the_single_env_does(env: InsertionEnv) -> None:
-    vector = tolins.make_vec(PANDA, 2, **QUIET)
+    vector = tolins.make_vec(env.spec.id, 2, **QUIET)
     observations, _ = vector.reset(seed=[5, 6])
     for i in range(2):
         single, _ = env.reset(seed=5 + i)
@@ -146,7 +175,8 @@ def test_the_dm_control_domain_steps_as_the_gym_id(randomization: str | None) ->
     kwargs = {"randomization": randomization, **QUIET}
     suite = dmc.load("circle2x2_panda", "insert", task_kwargs={"random": 5, **kwargs})
     assert isinstance(suite.physics, dmc.PandaInsertionPhysics)
-    env = gym.make(PANDA, **kwargs).unwrapped
+    assert suite.physics.version.number == 3  # the domain runs the Panda's newest
+    env = gym.make(PANDA_V3, **kwargs).unwrapped
     first = suite.reset()
     observation, _ = env.reset(seed=5)
     np.testing.assert_array_equal(np.concatenate(list(first.observation.values())), observation)

@@ -12,12 +12,12 @@ from dm_control import mujoco as dm_mujoco
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import CONTROL_DT
 from tolins.physics.compiled import compile_model
-from tolins.physics.panda import PandaStepper, compile_panda_world, split_draw
+from tolins.physics.panda import PandaStepper, compile_panda_world, default_gains, split_draw
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.registry import check_robot
 from tolins.physics.servo import ServoStepper
-from tolins.physics.versions import VERSIONS, PhysicsVersion
+from tolins.physics.versions import VERSIONS, PhysicsVersion, check_version_robot
 from tolins.physics.versions import physics_version as physics_version_of
 
 
@@ -80,6 +80,7 @@ class InsertionPhysics(dm_mujoco.Physics):
         if check_robot(robot) != cls.robot:
             return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot)
         version = physics_version_of(physics_version)
+        check_version_robot(version, robot)
         physics = cls.from_model(cls.compile(spec, version))
         if version is not physics.version:
             physics.version = version
@@ -135,7 +136,8 @@ class PandaInsertionPhysics(InsertionPhysics):
     version: PhysicsVersion = VERSIONS[2]
 
     def _bind_stepper(self) -> None:
-        self.stepper = PandaStepper(self.model.ptr, self.data.ptr, CONTROL_DT)
+        gains = default_gains(self.version.number)
+        self.stepper = PandaStepper(self.model.ptr, self.data.ptr, CONTROL_DT, gains)
         self._bound()
 
     @classmethod

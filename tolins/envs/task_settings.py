@@ -22,11 +22,12 @@ from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 from tolins.geometry.validation import check_int, check_positive, finite_vector
 from tolins.geometry.workspace import PIN_LENGTH, in_holes
 from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.physics.panda import check_gain_range
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
 from tolins.physics.registry import check_robot, simulator, taking_defect
 from tolins.physics.schedule import check_control_dt
-from tolins.physics.versions import physics_version
+from tolins.physics.versions import check_version_robot, physics_version
 
 #: Largest std of the grasp error ``[x, y, yaw]`` (mm, mm, rad): beyond it the part could
 #: leave the fingers' pads.
@@ -62,8 +63,8 @@ class TaskSettings:
             :func:`~tolins.geometry.defects.sample_defects` takes them (e.g. ``("burr",
             0.05)``, ``("blocked", None)``), after any bent pins of ``defect_sigma``; or
             ``None``.
-        physics_version: The MuJoCo physics, 1 or 2 (:mod:`tolins.physics.versions`; the
-            ``-v1`` and ``-v2`` ids).
+        physics_version: The MuJoCo physics, 1 or 2, or 3 with ``robot="panda"``
+            (:mod:`tolins.physics.versions`; the ``-v1``, ``-v2`` and ``-v3`` ids).
         robot: What holds the workpiece (:data:`~tolins.physics.registry.ROBOTS`):
             ``"free"``, the paper's ideal servos on a free-floating body, or ``"panda"``, a
             Franka Panda (:mod:`tolins.physics.panda`).
@@ -129,6 +130,9 @@ class TaskSettings:
         set_(self, "randomization", PhysicsRandomization.of(self.randomization))
         set_(self, "physics_version", physics_version(self.physics_version).number)
         set_(self, "robot", check_robot(self.robot))
+        check_version_robot(physics_version(self.physics_version), self.robot)
+        if self.robot == "panda" and self.randomization is not None:
+            check_gain_range(self.physics_version, self.randomization.servo_gain)
         set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])

@@ -15,7 +15,7 @@ from tolins.geometry.specs import (
     SocketSpec,
     with_clearance,
 )
-from tolins.physics.versions import LATEST, VERSIONS
+from tolins.physics.versions import LATEST, VERSIONS, versions_of
 
 ENTRY_POINT = "tolins.envs.insertion_env:InsertionEnv"
 #: The batched env of every id (``gymnasium.make_vec(..., vectorization_mode=
@@ -38,7 +38,8 @@ class Task:
         tags: Suite tags, e.g. ``paper``, ``circle``, ``polygon``, ``defective``, ``robot``.
         defect_sigma: Bent-pin std (mm) re-sampled at every reset, or ``None``.
         robot: What holds the workpiece (``"free"``, the paper's servos, or ``"panda"``).
-        versions: The physics versions it is registered in (``None``: every one).
+        versions: The physics versions it is registered in (``None``: every one its robot
+            has, :func:`~tolins.physics.versions.versions_of`).
     """
 
     name: str
@@ -52,7 +53,7 @@ class Task:
     @property
     def physics_versions(self) -> tuple[int, ...]:
         """The physics versions whose ids it has."""
-        return tuple(VERSIONS) if self.versions is None else self.versions
+        return versions_of(self.robot) if self.versions is None else self.versions
 
     @property
     def gym_id(self) -> str:
@@ -135,9 +136,9 @@ PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
 
 
 def _on_panda(task: Task) -> Task:
-    """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), on the
-    newest physics only, tagged ``robot`` (not ``paper`` or ``grade``: those suites stay the
-    free body's)."""
+    """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), on
+    physics version 2 and the Panda's newest, tagged ``robot`` (not ``paper`` or ``grade``:
+    those suites stay the free body's)."""
     return Task(
         name=f"{task.name}Panda",
         domain=f"{task.domain}_panda",
@@ -145,12 +146,12 @@ def _on_panda(task: Task) -> Task:
         tags=("robot", *(t for t in task.tags if t not in ("paper", "grade"))),
         defect_sigma=task.defect_sigma,
         robot="panda",
-        versions=(LATEST,),
+        versions=(2, LATEST),
     )
 
 
 #: The paper's workpieces and the 50 µm grades held by a Franka Panda: gymnasium ids
-#: ``tolins/{name}Panda-v2`` (no dm_control domains yet).
+#: ``tolins/{name}Panda-v2`` and ``-v3`` (:mod:`tolins.physics.versions`).
 ROBOT_TASKS: tuple[Task, ...] = tuple(
     _on_panda(task) for task in TASKS + GRADE_TASKS if task in TASKS or "fit50" in task.tags
 )
@@ -158,7 +159,7 @@ ROBOT_TASKS: tuple[Task, ...] = tuple(
 GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS
 #: The generic ids by physics version; pass ``socket=`` (and any other keyword) to
 #: ``gymnasium.make``.
-GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in VERSIONS}
+GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in versions_of("free")}
 GENERIC_ID = GENERIC_IDS[1]
 
 
@@ -168,7 +169,7 @@ def env_ids(*, generic: bool = True) -> tuple[str, ...]:
     ids = []
     for version in VERSIONS:
         ids += [task.gym_id_of(version) for task in GYM_TASKS if version in task.physics_versions]
-        if generic:
+        if generic and version in GENERIC_IDS:
             ids.append(GENERIC_IDS[version])
     return tuple(ids)
 
@@ -204,7 +205,7 @@ def register_envs() -> None:
             if version in task.physics_versions and task.gym_id_of(version) not in gym.registry:
                 kwargs = task.env_kwargs_of(version)
                 gym.register(id=task.gym_id_of(version), kwargs=kwargs, **entry_points)
-        if GENERIC_IDS[version] not in gym.registry:
+        if version in GENERIC_IDS and GENERIC_IDS[version] not in gym.registry:
             kwargs = {} if version == 1 else {"physics_version": version}
             gym.register(id=GENERIC_IDS[version], kwargs=kwargs, **entry_points)
 

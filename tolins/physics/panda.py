@@ -48,6 +48,7 @@ from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
 from tolins.mjcf.panda import GRAVITY, panda_world
 from tolins.paper import A_MAX
 from tolins.physics.arm import (
+    SIDEWAYS_STIFFNESS,
     Arm,
     Gains,
     close_fingers,
@@ -78,9 +79,20 @@ DROPPED = 3.0
 
 def compile_panda_world(socket: SocketSpec, physics_version: int = 2) -> mujoco.MjModel:
     """The compiled Panda world of ``socket`` for a physics version (its board in the world
-    body from version 2 on, :mod:`tolins.physics.versions`)."""
+    body from version 2 on, a firm grip from version 3, :mod:`tolins.physics.versions`)."""
     version = physics_version_of(physics_version)
-    return panda_world(socket, board_body=not version.board_in_world).compile()
+    world = panda_world(socket, board_body=not version.board_in_world, firm_grip=version.firm_grip)
+    return world.compile()
+
+
+def default_gains(physics_version: int = 2) -> Gains:
+    """The law's gains in a physics version: :class:`~tolins.physics.arm.Gains`'s defaults,
+    along x and y :data:`~tolins.physics.arm.SIDEWAYS_STIFFNESS` from version 3."""
+    gains = Gains()
+    if physics_version_of(physics_version).stiff_sideways:
+        stiffness = (SIDEWAYS_STIFFNESS, SIDEWAYS_STIFFNESS, *gains.stiffness[2:])
+        gains = dataclasses.replace(gains, stiffness=stiffness)
+    return gains
 
 
 def check_law_rate(model: mujoco.MjModel, law_rate: object) -> int:
@@ -108,6 +120,27 @@ def update_plan(nstep: int, checks: int, every: int) -> tuple[tuple[int, bool, b
     return tuple(
         (end - start, start % every == 0, end in ends) for start, end in itertools.pairwise(bounds)
     )
+
+
+#: The largest randomised ``servo_gain`` of a version whose law is stiff sideways: its
+#: stiffness times 2 still holds the part (measured on the 2*2 and the square at 50 µm);
+#: times 2.5 the law, held for 2 ms between updates, rings and the part is lost.
+STIFF_SIDEWAYS_MAX_GAIN = 2.0
+
+
+def check_gain_range(physics_version: int, servo_gain: tuple[float, float] | None) -> None:
+    """``ValueError`` if a randomised ``servo_gain`` range reaches beyond what the law of a
+    physics version stays stable with (:data:`STIFF_SIDEWAYS_MAX_GAIN` where it is stiff
+    sideways)."""
+    version = physics_version_of(physics_version)
+    too_stiff = servo_gain is not None and servo_gain[1] > STIFF_SIDEWAYS_MAX_GAIN
+    if too_stiff and version.stiff_sideways:
+        raise ValueError(
+            f"randomization.servo_gain={tuple(servo_gain)!r}: the Panda's law of "
+            f"physics_version={version.number} is unstable beyond "
+            f"{STIFF_SIDEWAYS_MAX_GAIN:g} times its stiffness; allowed: an upper bound of "
+            f"at most {STIFF_SIDEWAYS_MAX_GAIN:g}, or physics_version=2"
+        )
 
 
 def split_draw(draw: PhysicsDraw, gains: Gains) -> tuple[PhysicsDraw, Gains]:
@@ -289,10 +322,11 @@ class PandaBatch(Capabilities):
         socket: The nominal socket; every simulation starts with it.
         num_envs: Number of simulations.
         control_dt: Control period (s), as the free body's.
-        physics_version: 1 or 2: the board in a body of its own or in the world body
-            (:mod:`tolins.physics.versions`); the arm always steps on the contact step.
+        physics_version: 1, 2 or 3 (:mod:`tolins.physics.versions`): the board in a body
+            of its own or in the world body, a firm grip and a law stiff sideways from 3;
+            the arm always steps on the contact step.
         law_rate: Updates of the law per second (:data:`LAW_RATE`).
-        gains: The law's gains (:class:`~tolins.physics.arm.Gains`).
+        gains: The law's gains (default: the version's, :func:`default_gains`).
         contact_checks: Contact-force reads per control step, as the free body's.
     """
 
@@ -319,7 +353,7 @@ class PandaBatch(Capabilities):
         self._sockets = [socket] * self.num_envs
         models = [self.model] * self.num_envs
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
-        self.arm = Arm(self.model, gains)
+        self.arm = Arm(self.model, gains or default_gains(physics_version))
         self.sims = PandaSimulations(self.arm, models, datas, control_dt, law_rate, contact_checks)
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
@@ -423,11 +457,19 @@ class PandaStepper:
         data: Its data; read and written in place.
         control_dt: The control period (s) its steps take (``advance(nstep)`` of another
             number of physics steps sets another).
+        gains: The law's gains (default :class:`~tolins.physics.arm.Gains`'s; a physics
+            version's: :func:`default_gains`).
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, control_dt: float) -> None:
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        control_dt: float,
+        gains: Gains | None = None,
+    ) -> None:
         self.model, self.data = model, data
-        self.arm = Arm(model)
+        self.arm = Arm(model, gains)
         self.velocity = np.zeros(4)
         self._sims = PandaSimulations(self.arm, [model], [data], control_dt)
 

@@ -5,7 +5,7 @@ Usage::
     python benchmarks/capture.py                   # 4 cases × 2 speeds, about a minute
     python benchmarks/capture.py --eager-sensors   # sensors in every physics step
     python benchmarks/capture.py --physics-version 2   # the ``-v2`` physics
-    python benchmarks/capture.py --robot panda     # a Franka Panda holding the part (-v2)
+    python benchmarks/capture.py --robot panda --physics-version 3  # a Franka Panda (-v2, -v3)
 
 For each case (2*2 socket offset in x and in theta, square and hexagon peg offset in
 x) and push speed (2.5 and 0.5 mm/s), the offset is bisected between one that inserts
@@ -17,7 +17,7 @@ until success (tips 1 mm down) or 5 control steps (fast) / 10 (slow), as in
 the capture.
 
 With ``--robot panda`` the part is held by the arm (``InsertionEnv(..., robot="panda")``,
-``-v2``) and the offset asked of the reset is where the robot believes the part; the
+``-v2`` or ``-v3``) and the offset asked of the reset is where the robot believes the part; the
 grasp moves it a little as the fingers close, so the table also gives the part's true
 offset at the reset (``info["pose"]``) at the boundary found, and the capture over the
 geometric limit of that true offset.
@@ -103,14 +103,20 @@ def main(argv: list[str] | None = None) -> int:
         "--eager-sensors", action="store_true", help="sensors in every physics step (before 19)"
     )
     parser.add_argument(
-        "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
+        "--physics-version",
+        type=int,
+        choices=(1, 2, 3),
+        default=1,
+        help="the env ids' -v1, -v2 or -v3 (the Panda's only)",
     )
     parser.add_argument(
         "--robot", choices=("free", "panda"), default="free", help="what holds the part"
     )
     args = parser.parse_args(argv)
-    if args.robot == "panda" and args.physics_version != 2:
-        parser.error("--robot panda steps the -v2 physics only; add --physics-version 2")
+    if args.robot == "panda" and args.physics_version == 1:
+        parser.error("--robot panda steps the -v2 or -v3 physics; add --physics-version 2 or 3")
+    if args.robot == "free" and args.physics_version == 3:
+        parser.error("--physics-version 3 is the Panda's only; add --robot panda")
     ServoStepper.lazy_sensors = not args.eager_sensors
     start = time.perf_counter()
     panda = args.robot == "panda"

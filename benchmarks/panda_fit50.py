@@ -4,7 +4,7 @@ Usage::
 
     python benchmarks/panda_fit50.py [--episodes 100] [--experts efficient,safe]
         [--envs Circle2x2Fit50,Circle2x8Fit50,SquareFit50] [--variants default,...]
-        [--workers 2]
+        [--workers 2] [--version 2]
 
 ``panda_validation.py`` runs 20 episodes per row, where a success rate of 0.8 has a 95 %
 interval of ±0.18: too wide to tell whether the arm is within 0.05 of the free body. This
@@ -28,7 +28,8 @@ soft constraints' creep, so that the part does not slide in the hand) and ``firm
 (the pads' contacts with the handle alone stiffer, :func:`firm_pads_world`: a grip that
 barely creeps, everything else as the ids have it). Gains and a model change together:
 ``xy8+firm_pads``. ``--horizon`` (the paper's 40 control steps by default) gives both
-bodies more time.
+bodies more time. ``--version 3`` runs the Panda's ``-v3`` ids (their grip and gains are
+``firm_pads`` and ``xy8``'s; a variant of gains then replaces theirs).
 """
 
 from __future__ import annotations
@@ -127,7 +128,8 @@ def episodes(
         # the backend compiles (the pool's workers run one job after another).
         panda_physics.panda_world = firm_pads_world if model_change == "firm_pads" else panda_world
         try:
-            env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, gains=gains)
+            version = env.settings.physics_version
+            env.backend = PandaBackend(env.nominal_socket, env.control_dt, version, gains=gains)
         finally:
             panda_physics.panda_world = panda_world
         if model_change == "noslip":
@@ -179,6 +181,7 @@ def main() -> None:
         help=f"of {', '.join(VARIANTS)}, {', '.join(MODEL_VARIANTS)} (gains+model change too)",
     )
     parser.add_argument("--horizon", type=int, default=HORIZON, help="control steps")
+    parser.add_argument("--version", type=int, choices=(2, 3), default=2, help="the Panda ids'")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
     seeds = range(args.episodes)
@@ -195,7 +198,7 @@ def main() -> None:
             )
     jobs = {
         (name, expert, variant): (
-            f"tolins/{name}{'' if variant is None else 'Panda'}-v2",
+            f"tolins/{name}-v2" if variant is None else f"tolins/{name}Panda-v{args.version}",
             expert,
             seeds,
             variant,

@@ -3,11 +3,12 @@
 Usage::
 
     python benchmarks/panda_validation.py [--episodes 20] [--envs Circle2x2,Circle2x8,Square]
-        [--rates 250,500,1000]
+        [--rates 250,500,1000] [--version 2]
 
 For each preset and its 50 µm grade, each expert runs ``--episodes`` episodes (seeds 0 …)
 on ``tolins/{name}-v2`` (the free body on its servos) and on ``tolins/{name}Panda-v2`` (a
-Franka Panda holding the part, :mod:`tolins.physics.panda`). Printed per row: success,
+Franka Panda holding the part, :mod:`tolins.physics.panda`; ``--version 3``: the ``-v3``
+ids, a firm grip and a law stiff sideways). Printed per row: success,
 steps, collisions and reward (means), simulator faults (a part lost from the hand among
 them); for the Panda also the largest slip of the part in the hand during an episode (its
 true pose against the robot's belief, less the offset the grasp settled at), the share of
@@ -58,7 +59,8 @@ class LimitWatch:
 def run(env_id: str, expert: str, episodes: int, law_rate: int | None = None) -> dict[str, float]:
     env = gym.make(env_id).unwrapped
     if law_rate is not None:
-        env.backend = PandaBackend(env.nominal_socket, env.control_dt, 2, law_rate=law_rate)
+        version = env.settings.physics_version
+        env.backend = PandaBackend(env.nominal_socket, env.control_dt, version, law_rate=law_rate)
     panda = env.settings.robot == "panda"
     rows, slips, margins, steps_total, wall = [], [], [], 0, 0.0
     for seed in range(episodes):
@@ -117,7 +119,9 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--envs", default="Circle2x2,Circle2x8,Square")
     parser.add_argument("--rates", default="250,500,1000", help="law updates per second (Hz)")
+    parser.add_argument("--version", type=int, choices=(2, 3), default=2, help="the Panda ids'")
     args = parser.parse_args()
+    arm = f"Panda-v{args.version}"
     print(
         "| env | expert | robot | success | steps | collisions | reward | faults | "
         "largest slip (mm) | closest joint to its limit (rad) | torque-limited updates | "
@@ -129,7 +133,7 @@ def main() -> None:
                 free = run(f"tolins/{preset}-v2", expert, args.episodes)
                 watch = LimitWatch()
                 try:
-                    panda = run(f"tolins/{preset}Panda-v2", expert, args.episodes)
+                    panda = run(f"tolins/{preset}{arm}", expert, args.episodes)
                 finally:
                     watch.close()
                 share = watch.saturated / max(watch.updates, 1)
@@ -153,7 +157,7 @@ def main() -> None:
     )
     for rate in (int(r) for r in args.rates.split(",")):
         for expert in EXPERTS:
-            r = run("tolins/Circle2x2Panda-v2", expert, args.episodes, law_rate=rate)
+            r = run(f"tolins/Circle2x2{arm}", expert, args.episodes, law_rate=rate)
             default = " (default)" if rate == LAW_RATE else ""
             print(
                 f"| {rate}{default} | {expert} | {r['success']:.2f} | {r['steps']:.1f} "
@@ -165,7 +169,7 @@ def main() -> None:
         "\n| robot | step | board's push Fz (N) | sensed Fz (N) | tips' true z (mm) "
         "| believed z (mm) |\n|---|--:|--:|--:|--:|--:|"
     )
-    for robot, env_id in (("free", "tolins/Circle2x2-v2"), ("panda", "tolins/Circle2x2Panda-v2")):
+    for robot, env_id in (("free", "tolins/Circle2x2-v2"), ("panda", f"tolins/Circle2x2{arm}")):
         for k, (true, sensed, z, belief) in enumerate(press(env_id), start=1):
             print(f"| {robot} | {k} | {true:.2f} | {sensed:.2f} | {z:.3f} | {belief:.3f} |")
 

@@ -456,7 +456,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--diagnose", type=int, default=0, help="print contacts of K cases")
     parser.add_argument("--hole-sides", type=int, help="experiment: round holes as n-gons")
     parser.add_argument(
-        "--physics-version", type=int, choices=(1, 2), default=1, help="the env ids' -v1 or -v2"
+        "--physics-version",
+        type=int,
+        choices=(1, 2, 3),
+        default=1,
+        help="the env ids' -v1, -v2 or -v3 (the Panda's only)",
     )
     parser.add_argument(
         "--robot",
@@ -465,8 +469,10 @@ def main(argv: list[str] | None = None) -> int:
         help="what holds the part (panda: probes judged at the part's true pose at the reset)",
     )
     args = parser.parse_args(argv)
-    if args.robot == "panda" and args.physics_version != 2:
-        parser.error("--robot panda steps the -v2 physics only; add --physics-version 2")
+    if args.robot == "panda" and args.physics_version == 1:
+        parser.error("--robot panda steps the -v2 or -v3 physics; add --physics-version 2 or 3")
+    if args.robot == "free" and args.physics_version == 3:
+        parser.error("--physics-version 3 is the Panda's only; add --robot panda")
     if args.robot == "panda" and args.diagnose:
         parser.error("--diagnose reads the free body's servos; allowed: --robot free")
     if args.quick:

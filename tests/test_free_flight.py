@@ -149,5 +149,8 @@ def test_dm_control_runs_the_version_it_is_given() -> None:
 
 
 def test_unknown_physics_version_is_refused() -> None:
-    with pytest.raises(ValueError, match="physics_version=3; allowed: 1, 2"):
+    with pytest.raises(ValueError, match="physics_version=4; allowed: 1, 2, 3"):
+        gym.make("tolins/Insert-v1", socket=SOCKET, physics_version=4)
+    # The Panda's version is refused to the free body, naming the free body's.
+    with pytest.raises(ValueError, match="allowed with robot='free': physics_version 1, 2"):
         gym.make("tolins/Insert-v1", socket=SOCKET, physics_version=3)

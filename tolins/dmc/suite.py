@@ -62,7 +62,8 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
 
 
 #: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``):
-#: the presets', then the robot tasks' (``circle2x2_panda``, …, on ``-v2`` physics).
+#: the presets', then the robot tasks' (``circle2x2_panda``, …, on the robot's newest
+#: physics, ``-v3``).
 SUITES: dict[str, containers.TaggedTasks] = {
     t.domain: _domain_suite(t) for t in PRESETS + ROBOT_TASKS
 }

@@ -157,8 +157,12 @@ def main() -> None:
     )
     for rate in (int(r) for r in args.rates.split(",")):
         for expert in EXPERTS:
-            r = run(f"tolins/Circle2x2{arm}", expert, args.episodes, law_rate=rate)
             default = " (default)" if rate == LAW_RATE else ""
+            try:
+                r = run(f"tolins/Circle2x2{arm}", expert, args.episodes, law_rate=rate)
+            except ValueError as error:  # a rate the version's law is unstable at
+                print(f"| {rate}{default} | {expert} | refused: {error} |||||")
+                continue
             print(
                 f"| {rate}{default} | {expert} | {r['success']:.2f} | {r['steps']:.1f} "
                 f"| {r['collisions']:.2f} | {r['reward']:.2f} | {r['faults']} "

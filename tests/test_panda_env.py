@@ -13,7 +13,12 @@ from tolins.envs import InsertionEnv
 from tolins.envs.tasks import ROBOT_TASKS, TASKS, env_ids, task_of
 from tolins.mjcf.panda import FIRM_GRIP_IMPEDANCE
 from tolins.physics.arm import SIDEWAYS_STIFFNESS, Gains
-from tolins.physics.panda import DROPPED, update_plan
+from tolins.physics.panda import (
+    DROPPED,
+    STIFF_SIDEWAYS_MIN_RATE,
+    PandaBackend,
+    update_plan,
+)
 from tolins.policies import SafeExpert
 from tolins.record.arm import arm_drawing
 from tolins.record.recorder import RerunRecorder
@@ -158,6 +163,13 @@ def test_the_vector_env_steps_each_panda_as_the_single_env_does(env: InsertionEn
         single, *_ = env.step(actions[i])
         np.testing.assert_array_equal(single, stepped[i])
     vector.close()
+
+
+def test_v3s_law_is_refused_below_the_rate_it_holds_the_part_at() -> None:
+    socket = tolins.CircularSocket(2, 2)
+    with pytest.raises(ValueError, match=f"allowed: {STIFF_SIDEWAYS_MIN_RATE} Hz or more"):
+        PandaBackend(socket, 0.25, physics_version=3, law_rate=250)
+    assert PandaBackend(socket, 0.25, physics_version=2, law_rate=250).model is not None
 
 
 def test_the_law_is_updated_on_its_period_and_the_contacts_read_on_their_chunks() -> None:

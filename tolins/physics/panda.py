@@ -122,6 +122,9 @@ def update_plan(nstep: int, checks: int, every: int) -> tuple[tuple[int, bool, b
     )
 
 
+#: The slowest update rate (Hz) of a law stiff sideways: at 250 Hz it rings and loses the
+#: part within the first control steps of every episode; 500 and 1000 Hz agree.
+STIFF_SIDEWAYS_MIN_RATE = 500
 #: The largest randomised ``servo_gain`` of a version whose law is stiff sideways: its
 #: stiffness times 2 still holds the part (measured on the 2*2 and the square at 50 µm);
 #: times 2.5 the law, held for 2 ms between updates, rings and the part is lost.
@@ -140,6 +143,18 @@ def check_gain_range(physics_version: int, servo_gain: tuple[float, float] | Non
             f"physics_version={version.number} is unstable beyond "
             f"{STIFF_SIDEWAYS_MAX_GAIN:g} times its stiffness; allowed: an upper bound of "
             f"at most {STIFF_SIDEWAYS_MAX_GAIN:g}, or physics_version=2"
+        )
+
+
+def check_version_rate(physics_version: int, law_rate: int) -> None:
+    """``ValueError`` if a physics version's law is unstable at ``law_rate`` Hz (below
+    :data:`STIFF_SIDEWAYS_MIN_RATE` where it is stiff sideways)."""
+    version = physics_version_of(physics_version)
+    if version.stiff_sideways and law_rate < STIFF_SIDEWAYS_MIN_RATE:
+        raise ValueError(
+            f"law_rate={law_rate} Hz: the Panda's law of physics_version={version.number} "
+            f"rings below {STIFF_SIDEWAYS_MIN_RATE} Hz and loses the part; allowed: "
+            f"{STIFF_SIDEWAYS_MIN_RATE} Hz or more, or physics_version=2"
         )
 
 
@@ -325,7 +340,8 @@ class PandaBatch(Capabilities):
         physics_version: 1, 2 or 3 (:mod:`tolins.physics.versions`): the board in a body
             of its own or in the world body, a firm grip and a law stiff sideways from 3;
             the arm always steps on the contact step.
-        law_rate: Updates of the law per second (:data:`LAW_RATE`).
+        law_rate: Updates of the law per second (:data:`LAW_RATE`; at least
+            :data:`STIFF_SIDEWAYS_MIN_RATE` in a version stiff sideways).
         gains: The law's gains (default: the version's, :func:`default_gains`).
         contact_checks: Contact-force reads per control step, as the free body's.
     """
@@ -355,6 +371,7 @@ class PandaBatch(Capabilities):
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
         self.arm = Arm(self.model, gains or default_gains(physics_version))
         self.sims = PandaSimulations(self.arm, models, datas, control_dt, law_rate, contact_checks)
+        check_version_rate(physics_version, law_rate)
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:

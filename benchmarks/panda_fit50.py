@@ -43,7 +43,7 @@ import gymnasium as gym
 import numpy as np
 
 import tolins  # noqa: F401  (registers the ids)
-from tolins.mjcf.panda import GRIP_FRICTION, PREFIX, panda_world
+from tolins.mjcf.panda import grip_firmly, panda_world
 from tolins.paper import HORIZON
 from tolins.physics import panda as panda_physics
 from tolins.physics.arm import Gains
@@ -87,29 +87,16 @@ VARIANTS = {
 }
 #: The variants that change the model, not the gains.
 MODEL_VARIANTS = ("noslip", "firm_pads")
-#: The ``firm_pads`` variant's impedance of the pads' contacts with the handle, from the
-#: first µm of penetration (the task's contacts ramp from 0.99 to 0.999 over 0.01 mm): the
-#: friction that holds the part yields about ten times less.
-FIRM_PAD_IMPEDANCE = 0.999
 #: The ``noslip`` variant's iterations of MuJoCo's no-slip solver (the part cannot creep
 #: in the hand, nor the pins on the board: every contact's friction holds while it can).
 NOSLIP_ITERATIONS = 10
 
 
 def firm_pads_world(socket, **kwargs):
-    """:func:`~tolins.mjcf.panda.panda_world` with the pads' contacts on the handle as
-    explicit pairs of :data:`FIRM_PAD_IMPEDANCE` (a grip that barely creeps; the pins'
-    contacts on the board as the ids have them)."""
+    """:func:`~tolins.mjcf.panda.panda_world` with the ``-v3`` ids' firm grip
+    (:func:`~tolins.mjcf.panda.grip_firmly`) on a version without it."""
     world = panda_world(socket, **kwargs)
-    slide, spin, roll = GRIP_FRICTION
-    for side in ("left", "right"):
-        pad = world.geom(f"{PREFIX}panda0_{side}finger_pad")
-        pad.contype = pad.conaffinity = 0
-        pair = world.add_pair(geomname1=pad.name, geomname2="handle", condim=3)
-        pair.friction = [slide, slide, spin, roll, roll]
-        pair.solref = pad.solref
-        pair.solimp = [FIRM_PAD_IMPEDANCE, FIRM_PAD_IMPEDANCE, *pad.solimp[2:]]
-        pair.margin = pair.gap = 0.0
+    grip_firmly(world)
     return world
 
 

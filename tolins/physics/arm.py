@@ -55,9 +55,8 @@ READY = np.array([-1.4786, 1.0651, 1.3737, -2.4438, -1.3635, 0.5028, 0.8614])
 #: The law's stiffness along x and y (s⁻²) where a physics version's Panda is stiff
 #: sideways (:mod:`tolins.physics.versions`), eight times :class:`Gains`'s default: over
 #: the grip's task inertia (7.4 kg along x, 5.7 kg along y over the board) 0.9–1.2 kN/mm,
-#: against the default's 113–148 N/mm and the free body's servos' 200 N/mm. Its damping,
-#: 800 s⁻¹, times the law's period at 500 Hz is 1.6, within the 2 that a held torque
-#: allows.
+#: against the default's 113–148 N/mm and the free body's servos' 200 N/mm. The law holds
+#: it at 500 Hz and rings at 250 (:data:`~tolins.physics.panda.STIFF_SIDEWAYS_MIN_RATE`).
 SIDEWAYS_STIFFNESS = 160000.0
 
 

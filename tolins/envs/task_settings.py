@@ -128,9 +128,10 @@ class TaskSettings:
         set_(self, "control_dt", check_control_dt(self.control_dt))
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "randomization", PhysicsRandomization.of(self.randomization))
-        set_(self, "physics_version", physics_version(self.physics_version).number)
+        version = physics_version(self.physics_version)
+        set_(self, "physics_version", version.number)
         set_(self, "robot", check_robot(self.robot))
-        check_version_robot(physics_version(self.physics_version), self.robot)
+        check_version_robot(version, self.robot)
         if self.robot == "panda" and self.randomization is not None:
             check_gain_range(self.physics_version, self.randomization.servo_gain)
         set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))

@@ -21,8 +21,8 @@ stiffness doubled / halved, the damping still critical), ``down2`` / ``down_half
 downward force limit doubled / halved: 10 N, 2.5 N), ``xy4`` / ``xy8`` / ``xy16`` (the
 stiffness along x and y alone 4, 8 or 16 times; over the grip's task inertia, 7.4 kg
 along x and 5.7 kg along y at a reset over the 2*2, the default is 148 and 113 N/mm, the
-free body's servos 200 N/mm), ``tilt4`` (the stiffness about x
-and y alone four times: the hand tilts less under the pins' drag); and two that change the
+free body's servos 200 N/mm), ``tilt4`` (the stiffness about x and y alone four times:
+the hand tilts less under the pins' drag); and two that change the
 model: ``noslip`` (the default gains with MuJoCo's no-slip solver: friction without the
 soft constraints' creep, so that the part does not slide in the hand) and ``firm_pads``
 (the pads' contacts with the handle alone stiffer, :func:`firm_pads_world`: a grip that
@@ -92,6 +92,20 @@ MODEL_VARIANTS = ("noslip", "firm_pads")
 NOSLIP_ITERATIONS = 10
 
 
+def split_variant(variant: str) -> tuple[Gains, str]:
+    """A ``--variants`` entry's gains and its model change (``""``: none); ``ValueError``
+    naming what is allowed."""
+    name, _, model_change = variant.partition("+")
+    if name in MODEL_VARIANTS and not model_change:
+        name, model_change = "default", name
+    if name not in VARIANTS or model_change not in ("", *MODEL_VARIANTS):
+        raise ValueError(
+            f"--variants: {variant!r}; allowed: one of {', '.join(VARIANTS)}, "
+            f"{', '.join(MODEL_VARIANTS)}, or gains+{'|'.join(MODEL_VARIANTS)}"
+        )
+    return VARIANTS[name], model_change
+
+
 def firm_pads_world(socket, **kwargs):
     """:func:`~tolins.mjcf.panda.panda_world` with the ``-v3`` ids' firm grip
     (:func:`~tolins.mjcf.panda.grip_firmly`) on a version without it."""
@@ -107,10 +121,7 @@ def episodes(
     gains or grip, ``None``: the free body)."""
     env = gym.make(env_id, horizon=horizon).unwrapped
     if variant is not None and variant != "default":
-        name, _, model_change = variant.partition("+")
-        if name in MODEL_VARIANTS:
-            name, model_change = "default", name
-        gains = VARIANTS[name]
+        gains, model_change = split_variant(variant)
         # The candidate grip has no option on the ids: the world builder is swapped while
         # the backend compiles (the pool's workers run one job after another).
         panda_physics.panda_world = firm_pads_world if model_change == "firm_pads" else panda_world
@@ -174,15 +185,10 @@ def main() -> None:
     seeds = range(args.episodes)
     variants = args.variants.split(",")
     for variant in variants:
-        name, _, model_change = variant.partition("+")
-        if (name not in VARIANTS and name not in MODEL_VARIANTS) or model_change not in (
-            "",
-            *MODEL_VARIANTS,
-        ):
-            parser.error(
-                f"--variants: {variant!r}; allowed: one of {', '.join(VARIANTS)}, "
-                f"{', '.join(MODEL_VARIANTS)}, or gains+{'|'.join(MODEL_VARIANTS)}"
-            )
+        try:
+            split_variant(variant)
+        except ValueError as error:
+            parser.error(str(error))
     jobs = {
         (name, expert, variant): (
             f"tolins/{name}-v2" if variant is None else f"tolins/{name}Panda-v{args.version}",

@@ -120,11 +120,8 @@ def test_a_stage_that_raises_is_its_traceback_and_exit_1_naming_it(capsys, tmp_p
 @pytest.mark.slow
 def test_ctrl_c_stops_the_running_training_and_exits_130(tmp_path):
     """SIGINT while π_n trains: the bench stops within a control step of its rollouts
-    (the training's stage is left unfinished, not run to its end) and exits 130. The
-    paper profile's π_n trains for minutes, so the signal finds it training however late
-    a loaded machine delivers it (the quick profile's takes 5 s, less than the tests
-    beside it have delayed the signal); the stages before it take 7 s, as the quick's."""
-    options = ["bench", "--profile", "paper", "--rows", "C2.3", "--backend", "kinematic"]
+    (the training's stage is left unfinished, not run to its end) and exits 130."""
+    options = ["bench", "--profile", "quick", "--rows", "C2.3", "--backend", "kinematic"]
     options += ["--seeds", "1", "--no-study", "--no-robustness", "--no-robot"]
     options += ["--out", str(tmp_path)]
     # SIGINT raises KeyboardInterrupt even where the test runs in the background (a shell

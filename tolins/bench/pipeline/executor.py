@@ -48,6 +48,12 @@ from typing import Any
 from tolins.stopping import clear_stop, request_stop, wait_unless_stopped
 
 EXECUTORS = ("local", "ray")
+#: Seconds the main thread sleeps at most while it waits for jobs. The kernel may deliver a
+#: Ctrl-C to any thread of the process (to another one while the main thread has signals
+#: blocked, as glibc's ``pthread_create`` does for an instant each time a thread starts);
+#: Python runs the handler in the main thread only, the next time that thread wakes, so a
+#: wait without a timeout takes the interruption only when the next job ends.
+WAKE_S = 0.25
 INSTALL_RAY = "pip install 'tolins[ray]'"
 
 
@@ -163,7 +169,7 @@ class LocalExecutor:
                         while schedule.ready and len(running) < self.workers:
                             name = schedule.next()
                             running[pool.submit(call, by_name[name])] = name
-                        done, _ = wait(running, return_when=FIRST_COMPLETED)
+                        done, _ = wait(running, timeout=WAKE_S, return_when=FIRST_COMPLETED)
                         for future in done:
                             name = running.pop(future)
                             error = future.exception()
@@ -331,7 +337,7 @@ class RayExecutor:
                         job.fn, job.args, threads, self.shared, (started, job.name), *deps
                     )
                     running[where] = job
-                done, _ = ray.wait(list(running), num_returns=1, timeout=1.0)
+                done, _ = ray.wait(list(running), num_returns=1, timeout=WAKE_S)
                 if started is not None:  # made only with an on_start
                     for name in started.get_nowait_batch(started.qsize()):
                         on_start(by_name[name])

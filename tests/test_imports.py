@@ -33,6 +33,9 @@ LAYERS: dict[str, int] = {
     "tolins.atomic": 0,
     "tolins.names": 0,
     "tolins.stopping": 0,
+    # package data: the lookup (tolins.resources) and the embedding's checkpoints (no code)
+    "tolins.resources": 0,
+    "tolins.assets": 0,
     # specs, defects, the tolerance model (tolins.tolerance is its public name)
     "tolins.geometry": 1,
     "tolins.tolerance": 1,

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from tolins.resources import package_path
+
 PREFIX = "reference:"
-FOLDER = Path(__file__).parent
+FOLDER = package_path(__name__)
 
 
 def reference_names() -> list[str]:

@@ -3,9 +3,11 @@
 
 ``encode(spec)`` images the spec's tolerance (:func:`tolins.tolerance.image`, 64×64, the
 family's window) and runs the encoder of the shipped checkpoint of ``spec.family``
-(``assets/embedding_circle.pt``, ``assets/embedding_polygon.pt``; loaded once, cached).
+(``tolins/assets/embedding_circle.pt``, ``tolins/assets/embedding_polygon.pt``, package
+data; loaded once, cached).
 
-``model="graded"`` uses the graded checkpoints instead (``assets/embedding_<family>_graded.pt``):
+``model="graded"`` uses the graded checkpoints instead
+(``tolins/assets/embedding_<family>_graded.pt``):
 trained on the tolerance grades' ranges (circle radial clearance 0.015–0.35 mm, polygon
 gap 0.02–0.2 mm; :data:`tolins.learning.embedding.ranges.GRADED_RANGES`) imaged on a warped grid
 (:data:`tolins.geometry.tolerance.GRADED_WINDOWS`). The default ``model="paper"`` is the
@@ -31,9 +33,10 @@ from tolins.geometry.tolerance import image
 from tolins.learning.embedding.autoencoder import to_image, to_targets
 from tolins.learning.embedding.checkpoint import EmbeddingModel, load_checkpoint
 from tolins.learning.embedding.ranges import MODELS
+from tolins.resources import package_path
 
-#: The repository's (and an editable install's) ``assets/`` folder.
-ASSETS = Path(__file__).resolve().parents[3] / "assets"
+#: The package's ``tolins/assets/`` folder, where the shipped checkpoints are.
+ASSETS = package_path("tolins.assets")
 
 
 class ExtrapolationWarning(UserWarning):
@@ -41,14 +44,14 @@ class ExtrapolationWarning(UserWarning):
 
 
 def checkpoint_path(family: str, model: str = "paper") -> Path:
-    """The shipped checkpoint of ``family``: ``assets/embedding_<family>.pt``, or
-    ``assets/embedding_<family>_graded.pt`` for ``model="graded"``."""
+    """The shipped checkpoint of ``family``: ``tolins/assets/embedding_<family>.pt``, or
+    ``tolins/assets/embedding_<family>_graded.pt`` for ``model="graded"``."""
     if family not in ("circle", "polygon"):
         raise ValueError(f"family={family!r}; allowed: 'circle', 'polygon'")
     if model not in MODELS:
         raise ValueError(f"model={model!r}; allowed: {', '.join(map(repr, MODELS))}")
     suffix = "" if model == "paper" else f"_{model}"
-    return ASSETS / f"embedding_{family}{suffix}.pt"
+    return package_path("tolins.assets", f"embedding_{family}{suffix}.pt")
 
 
 @functools.cache
@@ -59,8 +62,8 @@ def load_model(family: str, model: str = "paper") -> EmbeddingModel:
     if not path.is_file():
         flag = "" if model == "paper" else f" --model {model}"
         raise FileNotFoundError(
-            f"{path} is missing; it ships with the repository (or train it with "
-            f"`tolins embed train --family {family}{flag} --out {path}`)"
+            f"{path} is missing; it ships as package data of tolins (reinstall tolins, or "
+            f"train it with `tolins embed train --family {family}{flag} --out {path}`)"
         )
     loaded = load_checkpoint(path, family=family)
     stored = loaded.config.get("model", "paper")

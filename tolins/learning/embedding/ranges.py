@@ -132,7 +132,7 @@ FamilyRanges = CircleRanges | PolygonRanges
 
 #: The ranges of each family, as trained for the shipped checkpoints.
 RANGES: dict[str, FamilyRanges] = {"circle": CircleRanges(), "polygon": PolygonRanges()}
-#: The ranges of the graded checkpoints (``assets/embedding_<family>_graded.pt``).
+#: The ranges of the graded checkpoints (``tolins/assets/embedding_<family>_graded.pt``).
 GRADED_RANGES: dict[str, FamilyRanges] = {
     "circle": GradedCircleRanges(),
     "polygon": GradedPolygonRanges(),

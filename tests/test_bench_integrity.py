@@ -159,6 +159,65 @@ def test_the_trajectories_stage_file_is_read_back_checked(tmp_path):
             read_trajectories(tmp_path)
 
 
+class Payload:
+    """Unpickling this creates ``marker``."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+TRAINED = ["--profile", "tiny", "--backend", "kinematic", "--rows", "C2.3"]
+TRAINED += ["--no-study", "--no-robustness", "--no-robot"]
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    """A finished tiny bench of π_n (BC, then RS-GAIL) and its trajectories: its folder."""
+    out = tmp_path_factory.mktemp("trained") / "run"
+    assert main(["bench", *TRAINED, "--out", str(out)]) == 0
+    return out
+
+
+@pytest.mark.parametrize(
+    ("name", "reader"),
+    [
+        ("policy.pt", "eval-C2.3-seed0"),
+        ("policy.pt", "trajectories-pi_n_safe-seed0"),
+        ("means.npy", "trajectories-pi_n_safe-seed0"),
+        ("curves.csv", None),  # read by the reports
+    ],
+)
+def test_a_planted_stage_file_stops_the_bench_naming_it_and_its_remedy(
+    trained, tmp_path, capsys, name, reader
+):
+    import torch
+
+    out = tmp_path / "copy"
+    shutil.copytree(trained, out)
+    folder, marker = _stage(out, "pi_n_safe-seed0"), tmp_path / "ran"
+    if name == "policy.pt":
+        torch.save({"format": "tolins.policy/1", "state_dict": Payload(marker)}, folder / name)
+    elif name == "means.npy":
+        np.save(folder / name, np.array([Payload(marker)], dtype=object), allow_pickle=True)
+    else:
+        (folder / name).write_text("env_steps,reward,success\n240,zero,0\n")
+    _rewrite_digests(folder)  # the digest check cannot tell
+    if reader is not None:
+        shutil.rmtree(_stage(out, reader))  # a stage that reads the file runs again
+    capsys.readouterr()
+    assert main(["bench", *TRAINED, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.startswith("tolins bench:")]
+    assert len(lines) == 1 and "Traceback" not in err, err  # besides the progress bar
+    assert str(folder / name) in lines[0], lines
+    assert f"delete its stage's folder {folder} and the same command runs" in lines[0], lines
+    assert not marker.exists()
+    assert (folder / MARKER).exists()  # nothing was moved or deleted
+
+
 def test_a_second_bench_on_one_out_names_the_process_holding_it(tmp_path, capsys):
     out = tmp_path / "held"
     holder = subprocess.Popen(

@@ -101,7 +101,7 @@ def test_replay_outside_the_recording_exits_2_with_one_line(
 def test_a_diverged_embedding_training_is_refused_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "e.pt"
     argv = ["embed", "train", "--family", "circle", "--workpieces", "32", "--epochs", "1"]
-    assert main([*argv, "--learning-rate", "1e9", "--out", str(out)]) == 2
+    assert main([*argv, "--learning-rate", "1e9", "--out", str(out)]) == 3  # refused
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert "embedding training diverged: loss nan" in err and "--learning-rate" in err, err
     assert not out.exists()

@@ -192,3 +192,23 @@ def test_compare_reads_the_schema_of_tolins_0_3_against_todays(tmp_path, capsys)
     assert {r[:3] for r in result.only_a} == {"R1.", "R2."}
     assert main(["compare", "reference:paper", str(old)]) == 0
     assert "15 of 15 shared rows consistent" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("content", "says"),
+    [
+        (b"[" * 5000, "nested deeper than"),
+        (b"\x80\x81 not text", "not UTF-8 text"),
+        (b"{not json", "not JSON"),
+    ],
+)
+def test_an_unreadable_results_file_is_one_line_naming_it(tmp_path, capsys, content, says):
+    bad = tmp_path / "bad.json"
+    bad.write_bytes(content)
+    err = _error(["compare", str(bad), "reference:quick"], capsys)
+    assert f"{bad}: {says}" in err and "allowed: " in err, err
+
+
+def test_a_long_results_argument_is_echoed_shortened(capsys):
+    err = _error(["compare", "a" * 20_000, "reference:quick"], capsys)
+    assert "no such file" in err and "…" in err and len(err) < 400, err

@@ -187,3 +187,13 @@ def test_a_seed_list_of_numpy_integers_seeds_as_python_ints() -> None:
     for bad in ([-1, 0, 1], [True, 0, 1], [0.5, 0, 1]):
         with pytest.raises(ValueError, match=r"seed\[0\]=.* is not a seed; allowed"):
             vector.reset(seed=bad)
+
+
+def test_the_single_env_refuses_a_bool_seed_and_takes_numpy_integers_as_the_vector_env() -> None:
+    env = gym.make(ENV, backend="kinematic").unwrapped
+    expected, _ = env.reset(seed=4)
+    for bad in (True, False, -1, 0.5):
+        with pytest.raises(ValueError, match=r"seed=.* is not a seed; allowed: None or an int"):
+            env.reset(seed=bad)
+    for kind in (np.int64, np.uint32):
+        assert np.array_equal(env.reset(seed=kind(4))[0], expected)

@@ -64,23 +64,34 @@ def test_demo_does_not_depend_on_the_number_of_workers() -> None:
     one = run_demo(episodes=1, seed=3, workers=1, progress=False)
     two = run_demo(episodes=1, seed=3, workers=2, progress=False)
     assert one == two
-    assert {row.env_id for row in one} == {task.gym_id for task in TASKS}
+    # The newest version of every paper preset, as the README's pages use them.
+    assert [row.env_id for row in one[::2]] == [f"tolins/{task.name}-v2" for task in TASKS]
     assert {row.expert for row in one} == {"safe", "efficient"}
     table = format_table(one)
     assert table.count("\n") == len(one) + 1
 
 
 @pytest.mark.slow
-def test_demo_command_prints_the_table() -> None:
+def test_demo_command_prints_the_table_with_the_pandas_rows() -> None:
+    argv = ["demo", "--episodes", "2", "--robot-episodes", "1"]
     result = subprocess.run(
-        [sys.executable, "-m", "tolins.cli", "demo", "--episodes", "2"],
-        capture_output=True,
-        text=True,
-        check=True,
+        [sys.executable, "-m", "tolins.cli", *argv], capture_output=True, text=True, check=True
     )
     for task in TASKS:
-        assert result.stdout.count(f"| {task.gym_id} |") == 2
-    assert "success rate" in result.stdout
+        assert result.stdout.count(f"| tolins/{task.name}-v2 |") == 2
+        assert result.stdout.count(f"| tolins/{task.name}Panda-v3 |") == 2
+    assert "success rate" in result.stdout and "1 per Panda row" in result.stdout
+
+
+@pytest.mark.slow
+def test_demo_without_the_robot_extra_says_how_to_add_the_pandas_rows() -> None:
+    hidden = "import sys; sys.modules['gymnasium_robotics'] = None; from tolins.cli import main"
+    code = f"{hidden}; sys.exit(main(['demo', '--episodes', '1']))"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "Panda" not in result.stdout and "| tolins/Circle2x2-v2 |" in result.stdout
+    lines = [line for line in result.stderr.splitlines() if "Panda" in line]
+    assert len(lines) == 1 and "tolins[robot]" in lines[0], result.stderr
 
 
 def test_demo_command_rejects_bad_arguments() -> None:

@@ -216,10 +216,21 @@ def test_the_socket_option_takes_a_file_and_the_short_form(tmp_path: Path) -> No
         (["--env", "tolins/Circle2x2-v1", "--out", "x.obj"], "allowed: a path ending in .stl"),
         (["--env", "tolins/Nope-v1", "--out", "x.stl"], "'tolins/Nope-v1' is not supported"),
         (["--env", "tolins/Insert-v1", "--out", "x.stl"], "with --socket"),
-        (["--socket", "nope", "--out", "x.stl"], "no such file, nor a JSON object"),
-        (["--socket", '{"rows": 2,', "--out", "x.stl"], "is not JSON"),
+        (["--socket", "nope", "--out", "x.stl"], "no such file, nor inline JSON"),
+        (["--socket", '{"rows": 2,', "--out", "x.stl"], "(inline JSON): not JSON"),
+        (["--socket", "[" * 5000, "--out", "x.stl"], "(inline JSON): nested deeper than"),
+        (["--socket", "[1, 2]", "--out", "x.stl"], "is not an object"),
         (["--socket", '{"rows": 2, "pins": 3}', "--out", "x.stl"], "no field pins"),
         (["--socket", '{"rows": 2, "cols": 1, "pin_radius": 0.6}', "--out", "x.stl"], "smaller"),
+        (
+            [
+                "--socket",
+                '{"sides": 4, "pin_circumradius": 1e6, "hole_circumradius": 1000000.1}',
+                "--out",
+                "x.stl",
+            ],
+            "allowed: every hole within 100 mm",
+        ),
         (["--env", "tolins/Square-v1", "--part", "pins", "--out", "x.stl"], "allowed: all"),
         (["--env", "tolins/Square-v1", "--part", "board", "--out", "x.xml"], "with .xml"),
         (["--out", "x.stl"], "one of the arguments --env --socket is required"),
@@ -240,3 +251,27 @@ def test_every_part_is_closed_for_every_preset_family() -> None:
         for plugs_apart in (False, True):
             parts = socket_parts(spec, plugs_apart=plugs_apart)
             assert all(p.mesh.is_watertight and p.mesh.volume > 0 for p in parts)
+
+
+@pytest.mark.parametrize(
+    ("content", "says"),
+    [(b"\x80\x81", "(a file): not UTF-8 text"), (b"[" * 5000, "(a file): nested deeper than")],
+)
+def test_an_unreadable_socket_file_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes, says: str
+) -> None:
+    path = tmp_path / "spec.json"
+    path.write_bytes(content)
+    assert main(["export", "--socket", str(path), "--out", str(tmp_path / "x.stl")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"--socket {path} {says}" in err, err
+    assert "allowed: a JSON object" in err, err
+
+
+@pytest.mark.parametrize("value", ["[" * 20_000, "x" * 20_000, "[" + "1, " * 7000 + "1]"])
+def test_a_long_socket_value_is_echoed_shortened(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], value: str
+) -> None:
+    assert main(["export", "--socket", value, "--out", str(tmp_path / "x.stl")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "…" in err and len(err) < 400, err

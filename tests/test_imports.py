@@ -28,11 +28,13 @@ _ROOT = Path(__file__).resolve().parents[1] / "tolins"
 #: Each top-level part of tolins and its layer. A file may import its own part and the
 #: parts of its layer or a lower one, never a higher one, at any depth.
 LAYERS: dict[str, int] = {
-    # leaf utilities: the paper's constants, atomic file writes, lists of names, stop requests
+    # leaf utilities: the paper's constants, atomic file writes, lists of names, stop
+    # requests, JSON handed in
     "tolins.paper": 0,
     "tolins.atomic": 0,
     "tolins.names": 0,
     "tolins.stopping": 0,
+    "tolins.json_input": 0,
     # package data: the lookup (tolins.resources) and the embedding's checkpoints (no code)
     "tolins.resources": 0,
     "tolins.assets": 0,

@@ -13,6 +13,7 @@ from rollouts import train_rs_gail_on_kinematic
 
 from tolins import __version__
 from tolins.cli import main
+from tolins.learning.artefacts import RunRefused
 from tolins.learning.imitation.bc import behaviour_clone
 from tolins.learning.imitation.config import BCConfig, ResidualConfig, RSGailConfig
 from tolins.learning.imitation.demonstrations import collect
@@ -80,7 +81,7 @@ def test_resume_continues_to_the_identical_result(demos, bc_policy, tmp_path):
             on_iteration=interrupt,
         )
     np.random.seed(12345)  # anything between the runs must not matter
-    with pytest.raises(ValueError, match="resume"):
+    with pytest.raises(RunRefused, match="resume"):
         _train(bc_policy.with_flat(bc_policy.get_flat()), demos, tmp_path / "b", config)
     resumed = _train(
         bc_policy.with_flat(bc_policy.get_flat()), demos, tmp_path / "b", config, resume=True
@@ -166,7 +167,7 @@ def test_cli_train_writes_its_artefacts(tmp_path, monkeypatch, capsys):
     capsys.readouterr()
     other = ["--iterations", "3", *rs[2:]]
     assert main(["train", "rs-gail", *common, *other, *init, "--out", str(tmp_path / "rs"),
-                 "--resume"]) == 2  # fmt: skip
+                 "--resume"]) == 3  # fmt: skip
     err = capsys.readouterr().err
     assert "another run configuration (differs in: configs)" in err and "--resume" in err, err
     monkeypatch.undo()

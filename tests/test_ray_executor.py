@@ -255,6 +255,60 @@ def test_an_address_without_a_ray_head_says_so(tmp_path, capsys):
     assert not (tmp_path / "stages").exists()
 
 
+@pytest.fixture
+def not_a_head():
+    """A port on a loopback address that accepts connections and never answers (as a
+    service other than a Ray head, or a firewall, can): its ``HOST:PORT``."""
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.2", 0))  # not 127.0.0.1, which Ray swaps for the machine's IP
+        listener.listen(16)
+        yield f"127.0.0.2:{listener.getsockname()[1]}"
+
+
+@pytest.mark.parametrize("where", ["closed port", "no Ray head"])
+def test_an_address_without_a_ray_head_is_one_line(tmp_path, not_a_head, where):
+    address = "127.0.0.1:1" if where == "closed port" else not_a_head
+    command = [sys.executable, "-m", "tolins", *_bench_cli(tmp_path / "out", "--executor", "ray")]
+    try:
+        done = subprocess.run(
+            [*command, "--address", address], capture_output=True, text=True, timeout=60
+        )
+    except subprocess.TimeoutExpired as expired:
+        pytest.fail(f"still connecting after 60 s; its stderr: {expired.stderr!r}"[:3000])
+    err = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(err) == 1, done.stderr[-3000:]
+    assert f"address={address!r}" in err[0] and "no Ray head answers there" in err[0], err
+    assert not (tmp_path / "out" / "stages").exists()
+
+
+@pytest.mark.parametrize("where", ["closed port", "no Ray head"])
+def test_an_address_without_a_ray_head_is_refused_in_seconds_before_ray_init(
+    monkeypatch, not_a_head, where
+):
+    from tolins.bench.pipeline.executor import PROBE_S
+
+    def init(*args, **kwargs):
+        raise AssertionError("ray.init was called: it retries for minutes")
+
+    monkeypatch.setattr(ray, "init", init)
+    address = "127.0.0.1:1" if where == "closed port" else not_a_head
+    began = time.monotonic()
+    with pytest.raises(ValueError, match="no Ray head answers there"):
+        RayExecutor(address)
+    assert time.monotonic() - began < 2 * PROBE_S + 3
+
+
+def test_a_damaged_stage_file_read_in_a_task_is_its_one_line(local_ray, tmp_path):
+    from tolins.bench.store.integrity import StageFileError, read_json
+
+    (tmp_path / "episodes.json").write_text("[1,")
+    with pytest.raises(StageFileError) as raised:
+        RayExecutor().run([Stage("eval", read_json, (tmp_path / "episodes.json",))])
+    assert type(raised.value) is StageFileError and failed_stage(raised.value) == "eval"
+    assert str(raised.value).startswith(f"{tmp_path / 'episodes.json'}: not JSON")
+    assert "\n" not in str(raised.value)
+
+
 def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray):
     # Library functions: Ray imports them by name on its workers.
     jobs = [Stage("slow", time.sleep, (2.5,)), Stage("after", print, ("after",), deps=("slow",))]

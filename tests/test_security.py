@@ -19,6 +19,7 @@ from rollouts import train_rs_gail_on_kinematic
 
 import tolins
 from tolins.cli import main
+from tolins.learning.artefacts import RunRefused
 from tolins.learning.imitation.config import BCConfig, RSGailConfig
 
 ENV = "tolins/Circle2x2-v1"
@@ -96,7 +97,7 @@ def test_an_old_checkpoint_with_a_pickled_strategy_is_refused_unrun(interrupted,
         p["format"] = "tolins.rs_gail_run/1"
         p["es"] = torch.frombuffer(bytearray(_payload(marker)), dtype=torch.uint8)
 
-    with pytest.raises(ValueError, match=r"format 'tolins\.rs_gail_run/1'.*could run code.*delete"):
+    with pytest.raises(RunRefused, match=r"format 'tolins\.rs_gail_run/1'.*could run code.*delete"):
         train(_copy_run(checkpoint, tmp_path / "old", old), resume=True)
     assert not marker.exists()
 
@@ -107,7 +108,7 @@ def test_an_edited_cma_es_state_is_refused(interrupted, tmp_path):
     def edit(p):  # the ranking of the first iteration reversed: another mean follows
         p["told"][0] = -p["told"][0]
 
-    with pytest.raises(ValueError, match="does not replay"):
+    with pytest.raises(RunRefused, match="does not replay"):
         train(_copy_run(checkpoint, tmp_path / "edited", edit), resume=True)
 
 
@@ -213,6 +214,147 @@ def test_policy_help_says_module_name_is_code(capsys):
             main([command, "--help"])
         text = " ".join(capsys.readouterr().out.split())
         assert "runs its code" in text and "--trust-pickle" in text, command
+
+
+# --- declared sizes: checked against bounds before anything is built ----------------
+
+
+def _policy_file(tmp_path: Path, **architecture) -> Path:
+    """A policy file whose declared architecture has ``architecture``'s fields instead."""
+    from tolins.learning.imitation.policy import Policy, PolicyArchitecture, save_policy
+
+    path = tmp_path / "policy.pt"
+    save_policy(path, Policy(PolicyArchitecture()), {})
+    payload = torch.load(path, weights_only=True)
+    payload["architecture"].update(architecture)
+    torch.save(payload, path)
+    return path
+
+
+def _forbid(monkeypatch, target, name: str) -> None:
+    """Building from the file's sizes fails the test (a memory bomb must be refused before)."""
+
+    def built(*args, **kwargs):
+        raise AssertionError(f"{name} was built from the file's declared sizes")
+
+    monkeypatch.setattr(target, name, built)
+
+
+def _one_line_exit_2(path: Path, capsys) -> str:
+    args = ["evaluate", "--policy", str(path), "--env", ENV, "--backend", "kinematic"]
+    assert main([*args, "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "allowed: " in err[0], err
+    return err[0]
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("hidden", -1),
+        ("hidden", "abc"),
+        ("hidden", 30_000),
+        ("hidden", 10**6),
+        ("hidden", True),
+        ("hidden", 32.0),
+        ("residual_hidden", 0),
+        ("residual_hidden", 10**9),
+        ("kind", "bogus"),
+    ],
+)
+def test_a_policy_file_declaring_a_size_or_kind_out_of_bounds_is_refused_unbuilt(
+    tmp_path, capsys, monkeypatch, field, value
+):
+    import tolins.learning.imitation.policy as policy
+
+    path = _policy_file(tmp_path, **{field: value})
+    _forbid(monkeypatch, policy, "_mlp")
+    assert f"architecture.{field}={value!r}" in _one_line_exit_2(path, capsys)
+
+
+def test_policy_files_at_the_bounds_load(tmp_path):
+    from tolins.learning.imitation.config import HIDDEN_MAX
+    from tolins.learning.imitation.policy import (
+        Policy,
+        PolicyArchitecture,
+        load_policy,
+        save_policy,
+    )
+
+    for architecture in (
+        PolicyArchitecture(),
+        PolicyArchitecture("tolerance_guided", hidden=1, residual_hidden=HIDDEN_MAX),
+    ):
+        save_policy(tmp_path / "p.pt", Policy(architecture), {"seed": 0})
+        assert load_policy(tmp_path / "p.pt")[0].architecture == architecture
+
+
+@pytest.fixture(scope="module")
+def sb3_zips(tmp_path_factory):
+    """tolins's PPO and SAC zips (``algorithm -> path``)."""
+    root = tmp_path_factory.mktemp("zips")
+    return {algorithm: _sb3_zip(root, algorithm) for algorithm in ("ppo", "sac")}
+
+
+@pytest.mark.parametrize(
+    ("algorithm", "key", "value"),
+    [
+        ("ppo", "net_arch", [-5]),
+        ("ppo", "net_arch", [30_000, 30_000]),
+        ("ppo", "net_arch", [200_000, 200_000]),
+        ("ppo", "net_arch", ["abc"]),
+        ("ppo", "net_arch", {"pi": [64], "vf": [10**6]}),
+        ("ppo", "net_arch", [{"pi": [64], "vf": [-1]}]),
+        ("ppo", "net_arch", [64] * 100),
+        ("ppo", "net_arch", [4096] * 8),
+        ("sac", "net_arch", [200_000, 200_000]),
+        ("sac", "net_arch", {"pi": [64], "qf": [0]}),
+        ("sac", "net_arch", {"pi": [64], "vf": [64]}),
+        ("sac", "n_critics", 10**6),
+    ],
+)
+def test_an_sb3_zip_declaring_sizes_out_of_bounds_is_refused_unbuilt(
+    sb3_zips, tmp_path, capsys, monkeypatch, algorithm, key, value
+):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.sac.policies import SACPolicy
+
+    def edit(data):
+        data["policy_kwargs"][key] = value
+
+    path = _replace_data(sb3_zips[algorithm], tmp_path / "sized.zip", edit)
+    for policy_class in (ActorCriticPolicy, SACPolicy):
+        _forbid(monkeypatch, policy_class, "__init__")
+    assert f"{key}=" in _one_line_exit_2(path, capsys)
+
+
+def test_sb3_zips_of_usual_sizes_load(sb3_zips, tmp_path):
+    from tolins.learning.agents.external import load_sb3
+
+    for algorithm, net_arch in (
+        ("ppo", {"pi": [256, 256], "vf": [256, 256]}),
+        ("ppo", [dict(pi=[64], vf=[64])]),  # SB3 < 1.8's form
+        ("sac", {"pi": [400, 300], "qf": [400, 300]}),
+    ):
+
+        def edit(data, net_arch=net_arch):
+            data["policy_kwargs"]["net_arch"] = net_arch
+
+        path = _replace_data(sb3_zips[algorithm], tmp_path / "usual.zip", edit)
+        with pytest.raises(ValueError, match="do not fit"):  # the weights are of 64 × 64
+            load_sb3(path)
+        assert load_sb3(sb3_zips[algorithm])(np.zeros(8)).shape == (4,)
+
+
+@pytest.mark.parametrize("data", [b"[" * 5000, b"\x80 not text", b"{"])
+def test_an_sb3_zip_whose_json_is_unreadable_is_one_line(sb3_zips, tmp_path, capsys, data):
+    path = tmp_path / "bad.zip"
+    with zipfile.ZipFile(sb3_zips["ppo"]) as source, zipfile.ZipFile(path, "w") as target:
+        for item in source.namelist():
+            target.writestr(item, data if item == "data" else source.read(item))
+    err = _one_line_exit_2(path, capsys)
+    assert "its data entry: " in err and "allowed: a stable-baselines3 model zip" in err
 
 
 # --- bench stage files (JSON, npy) -------------------------------------------------

@@ -6,10 +6,13 @@ from dataclasses import dataclass
 
 from tqdm import tqdm
 
-from tolins.envs.tasks import TASKS
+from tolins.envs.tasks import ROBOT_TASKS, TASKS, Task
 from tolins.policies.experts import EXPERTS
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
 from tolins.rollouts.summary import Summary, summarise
+
+#: The largest vector env of a demo (slots per env id).
+MAX_SLOTS = 32
 
 
 @dataclass(frozen=True)
@@ -21,39 +24,72 @@ class DemoRow:
     summary: Summary
 
 
+def newest_id(task: Task) -> str:
+    """``task``'s id of its newest physics version (``-v2``; the Panda's ``-v3``)."""
+    return task.gym_id_of(max(task.physics_versions))
+
+
+def robot_tasks() -> tuple[Task, ...]:
+    """The Panda's tasks of the paper's workpieces (the demo's robot rows)."""
+    paper = {task.name for task in TASKS}
+    return tuple(task for task in ROBOT_TASKS if task.name.removesuffix("Panda") in paper)
+
+
+def demo_ids(robot: bool) -> list[str]:
+    """The ids a demo rolls out: every paper preset's newest, then, with ``robot``, the
+    Panda's of the same workpieces."""
+    tasks = TASKS + (robot_tasks() if robot else ())
+    return [newest_id(task) for task in tasks]
+
+
 def run_demo(
     episodes: int = 20,
     seed: int = 0,
     workers: int = 2,
     backend: str = "mujoco",
     progress: bool = True,
+    robot_episodes: int = 0,
 ) -> list[DemoRow]:
     """Roll out both experts for ``episodes`` episodes (seeds ``seed``, ``seed + 1``, ...)
-    in every preset environment, side by side in one vector env per preset stepped on
-    ``workers`` threads (:func:`tolins.rollouts.runner.run_jobs`). Results do not depend
-    on ``workers``: each episode is the single env's from its seed."""
-    if episodes < 1 or workers < 1:
-        raise ValueError(f"episodes={episodes!r}, workers={workers!r}; allowed: both ≥ 1")
-    experts = list(EXPERTS)
-    envs = VectorEnvCache(backend, num_envs=min(2 * episodes, 32), num_threads=workers)
+    in the newest id of every preset environment, and for ``robot_episodes`` in the
+    Panda's of the paper's workpieces (none at 0; MuJoCo only, ``tolins[robot]``), side by
+    side in one vector env per id stepped on ``workers`` threads
+    (:func:`tolins.rollouts.runner.run_jobs`). Results do not depend on ``workers``: each
+    episode is the single env's from its seed."""
+    if episodes < 1 or workers < 1 or robot_episodes < 0:
+        raise ValueError(
+            f"episodes={episodes!r}, workers={workers!r}, robot_episodes={robot_episodes!r}; "
+            "allowed: episodes and workers ≥ 1, robot_episodes ≥ 0"
+        )
+    if robot_episodes and backend != "mujoco":
+        raise ValueError(f"robot_episodes={robot_episodes} on backend={backend!r}; allowed: mujoco")
+    counts = {env_id: episodes for env_id in demo_ids(robot=False)}
+    if robot_episodes:
+        counts |= {newest_id(task): robot_episodes for task in robot_tasks()}
     rows = []
-    try:
-        bar = tqdm(total=len(TASKS), desc="demo", unit="env", disable=not progress)
-        for task in TASKS:
-            jobs = [
-                Job(task.gym_id, EXPERTS[expert](), seed + i)
-                for expert in experts
-                for i in range(episodes)
-            ]
-            results = run_jobs(envs, jobs)
-            for k, expert in enumerate(experts):
-                mine = results[k * episodes : (k + 1) * episodes]
-                rows.append(DemoRow(task.gym_id, expert, summarise(mine)))
-            bar.update()
-        bar.close()
-    finally:
-        envs.close()
-    return rows
+    bar = tqdm(total=len(counts), desc="demo", unit="env", disable=not progress)
+    for count in sorted(set(counts.values()), reverse=True):
+        envs = VectorEnvCache(backend, num_envs=min(2 * count, MAX_SLOTS), num_threads=workers)
+        try:
+            for env_id in (env_id for env_id, n in counts.items() if n == count):
+                rows += _rows(envs, env_id, count, seed)
+                bar.update()
+        finally:
+            envs.close()
+    bar.close()
+    order = list(counts)
+    return sorted(rows, key=lambda row: order.index(row.env_id))
+
+
+def _rows(envs: VectorEnvCache, env_id: str, episodes: int, seed: int) -> list[DemoRow]:
+    """Both experts' rows of ``env_id``, ``episodes`` episodes each."""
+    experts = list(EXPERTS)
+    jobs = [Job(env_id, EXPERTS[expert](), seed + i) for expert in experts for i in range(episodes)]
+    results = run_jobs(envs, jobs)
+    return [
+        DemoRow(env_id, expert, summarise(results[k * episodes : (k + 1) * episodes]))
+        for k, expert in enumerate(experts)
+    ]
 
 
 def format_table(rows: list[DemoRow]) -> str:

@@ -9,14 +9,21 @@ their end; their finished work (stage folders, RS-GAIL's per-iteration checkpoin
 kept, as every file is written atomically. Work waiting on other processes (a deep-RL
 training's, the inference study's) waits through :func:`wait_unless_stopped`, and its
 owner ends those processes.
+
+A process that ends on a signal can first bring its work to a point it can resume from:
+inside :class:`DeferredSignals` SIGINT and SIGTERM are only noted, and the work delivers
+them (:meth:`DeferredSignals.deliver`) once it has written its checkpoint (a deep-RL
+training's process, which the bench's executor ends with SIGTERM).
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import threading
 from collections.abc import Callable
-from typing import TypeVar
+from types import FrameType
+from typing import Any, TypeVar
 
 T = TypeVar("T")
 _requested = threading.Event()
@@ -56,3 +63,43 @@ def wait_unless_stopped(get: Callable[[float], T], every: float = 0.5) -> T:
             return get(every)
         except multiprocessing.TimeoutError:
             raise_if_stopped()
+
+
+class DeferredSignals:
+    """SIGINT and SIGTERM held back inside the ``with`` block (in the main thread only:
+    elsewhere Python delivers no signal, and nothing changes).
+
+    A held signal is :attr:`pending` until :meth:`deliver` (or leaving the block) restores
+    the previous handlers and raises it again, so it then does what it would have done at
+    once: SIGINT raises ``KeyboardInterrupt``, SIGTERM ends the process. Of several, SIGTERM
+    is the one delivered (the bench's executor follows a Ctrl-C with SIGTERM to its
+    processes).
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.pending: int | None = None
+        self._previous: dict[int, Any] = {}
+
+    def __enter__(self) -> DeferredSignals:
+        if threading.current_thread() is threading.main_thread():
+            for number in self.SIGNALS:
+                self._previous[number] = signal.signal(number, self._hold)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.deliver()
+
+    def _hold(self, number: int, _frame: FrameType | None) -> None:
+        if self.pending is None or number == signal.SIGTERM:
+            self.pending = number
+
+    def deliver(self) -> None:
+        """Restore the handlers from before the block and raise the pending signal, if any."""
+        previous, self._previous = self._previous, {}
+        for number, handler in previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+        number, self.pending = self.pending, None
+        if number is not None:
+            signal.raise_signal(number)

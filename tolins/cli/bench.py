@@ -55,16 +55,22 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every option, run the bench, and print its table and claims. A bad option
-    or a damaged stage file is one line and exit status 2; a stage that raised is its
-    traceback and exit status 1."""
+    """Check every option, run the bench, and print its table and claims. A bad option,
+    a missing optional part (the Panda's ``tolins[robot]``) or a damaged stage file is one
+    line and exit status 2; a training that refused to go on (its checkpoint from another
+    configuration, a diverged run: :class:`~tolins.learning.artefacts.RunRefused`) one line
+    and exit status 3; any other stage that raised is its traceback and exit status 1."""
     try:
         out = checks.output_folder("--out", args.out or Path("results") / args.profile)
         config = config_from_args(BenchConfig, args, out=str(out))
+        if config.robot and config.backend == "mujoco":
+            checks.require_robot("its Panda table (on by default; --no-robot leaves it out)")
     except ValueError as error:  # OptionError too
         return checks.fail("tolins bench", error)
     from tolins.bench.pipeline.runner import plan_bench, run_bench
     from tolins.bench.reports.markdown import format_claims, format_results_table
+    from tolins.bench.store.integrity import StageFileError
+    from tolins.learning.artefacts import RunRefused
 
     if args.dry_run:
         try:
@@ -75,9 +81,11 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         bench = run_bench(config)
-    except (ValueError, FileNotFoundError) as error:
+    except (ValueError, FileNotFoundError, RunRefused) as error:
         stage = failed_stage(error)
-        if stage is None:  # refused before any stage ran, or a stage's files are damaged
+        if isinstance(error, RunRefused):  # a training that will not go on: say why
+            return checks.refused(f"tolins bench: stage {stage}", error)
+        if stage is None or isinstance(error, StageFileError):  # refused, or a file damaged
             return checks.fail("tolins bench", error)
         traceback.print_exception(error)
         print(

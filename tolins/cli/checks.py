@@ -3,8 +3,9 @@
 Each runs before any work starts, so a bad option costs nothing and loses nothing. The
 argparse ``type=`` functions (:func:`seed`, :func:`port`, :func:`positive_int`,
 :func:`env_ids`) report through argparse; the path checks (:func:`output_file`,
-:func:`output_folder`, :func:`input_file`) raise :class:`OptionError`. Both end as one
-line on stderr and exit status 2 (:func:`tolins.cli.main`).
+:func:`output_folder`, :func:`input_file`) and the optional parts' checks
+(:func:`require_robot`: the Panda model of ``tolins[robot]``) raise :class:`OptionError`.
+Both end as one line on stderr and exit status 2 (:func:`tolins.cli.main`).
 """
 
 from __future__ import annotations
@@ -77,6 +78,11 @@ def positive_int(text: str) -> int:
     return _integer(text, 1)
 
 
+def non_negative_int(text: str) -> int:
+    """A count option that may be 0 (none): an integer ≥ 0."""
+    return _integer(text, 0)
+
+
 class JoinedList(argparse.Action):
     """A comma-separated list option that adds up when repeated: ``--rows A --rows B,C``
     is ``--rows A,B,C`` (not the last one alone)."""
@@ -129,7 +135,40 @@ def preset_env_ids(*, several: bool = False) -> Callable[[str], str]:
     from tolins.envs import tasks
 
     reasons = dict.fromkeys(tasks.GENERIC_IDS.values(), "it needs socket=, which no option sets")
-    return env_ids(tasks.env_ids(generic=False), several=several, reasons=reasons)
+    known = env_ids(tasks.env_ids(generic=False), several=several, reasons=reasons)
+
+    def check(text: str) -> str:
+        known(text)
+        for part in text.split(","):
+            try:
+                require_robot_for(part)
+            except OptionError as error:
+                raise argparse.ArgumentTypeError(str(error)) from None
+        return text
+
+    check.__name__ = "env id"
+    return check
+
+
+def require_robot(user: str) -> None:
+    """:class:`OptionError` (one line naming ``tolins[robot]``) unless the Panda model is
+    installed; ``user`` names what needs it."""
+    from tolins.mjcf.panda import require_panda
+
+    try:
+        require_panda(user)
+    except ImportError as error:
+        raise OptionError(str(error)) from None
+
+
+def require_robot_for(env_id: str, option: str | None = None) -> None:
+    """:func:`require_robot` if ``env_id`` (the value of ``option``, if given) is a robot
+    task's id."""
+    from tolins.envs import tasks
+
+    robot = {t.gym_id_of(v) for t in tasks.ROBOT_TASKS for v in t.physics_versions}
+    if env_id in robot:
+        require_robot(env_id if option is None else f"{option} {env_id}")
 
 
 def input_file(option: str, path: str | os.PathLike[str]) -> Path:
@@ -189,3 +228,14 @@ def fail(prog: str, error: Exception) -> int:
     """Print ``error`` as one line for ``prog`` on stderr; the exit status of a bad option."""
     print(f"{prog}: {error}", file=sys.stderr)
     return 2
+
+
+#: The exit status of a training that refused to start or go on
+#: (:class:`~tolins.learning.artefacts.RunRefused`).
+REFUSED = 3
+
+
+def refused(prog: str, error: Exception) -> int:
+    """Print ``error`` (a refused run) as one line for ``prog`` on stderr; :data:`REFUSED`."""
+    print(f"{prog}: {error}", file=sys.stderr)
+    return REFUSED

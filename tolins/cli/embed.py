@@ -36,6 +36,7 @@ def run_train(args: argparse.Namespace) -> int:
     out = checks.output_file("--out", args.out or f"runs/embedding_{config.family}{suffix}.pt")
     from tqdm import tqdm
 
+    from tolins.learning.artefacts import RunRefused
     from tolins.learning.embedding.checkpoint import save_checkpoint
     from tolins.learning.embedding.evaluation import held_out_specs, measure
     from tolins.learning.embedding.train import train_embedding
@@ -49,9 +50,9 @@ def run_train(args: argparse.Namespace) -> int:
 
         try:
             result = train_embedding(config, on_epoch=advance)
-        except ValueError as error:  # diverged: no checkpoint of NaN weights
+        except RunRefused as error:  # diverged: no checkpoint of NaN weights
             bar.close()
-            return checks.fail("tolins embed train", error)
+            return checks.refused("tolins embed train", error)
     path = save_checkpoint(out, result.model)
     quality = measure(
         result.model, held_out_specs(config.family, args.held_out, model=config.model)

@@ -49,6 +49,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate the policy, print its row beside the reference rows, and write them."""
+    checks.require_robot_for(args.env, "--env")
     if args.out:
         checks.output_folder("--out", args.out)
     from tolins.bench.evaluate import evaluate_policy, format_rows, reference_rows, write_evaluation

@@ -50,19 +50,31 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def _spec(args: argparse.Namespace) -> SocketSpec:
-    """The workpiece of ``--env`` or ``--socket`` (``ValueError``, ``OSError`` for a bad one)."""
-    from tolins.geometry.spec_json import spec_from_json
+    """The workpiece of ``--env`` or ``--socket`` (``ValueError``, ``OSError`` for a bad
+    one): ``--socket`` is inline JSON when it starts with ``{`` or ``[``, else a file."""
+    from tolins.geometry.spec_json import ALLOWED, spec_from_json
+    from tolins.json_input import shorten
 
     if args.env is not None:
         return tasks.task_of(args.env).socket
-    if args.socket.lstrip().startswith("{"):
-        return spec_from_json(args.socket)
-    if Path(args.socket).is_file():
-        return spec_from_json(Path(args.socket).read_text(encoding="utf-8"))
-    raise ValueError(
-        f"--socket {args.socket}: no such file, nor a JSON object; allowed: a JSON "
-        'object of a spec\'s fields (e.g. {"rows": 2, "cols": 2}) or a file holding one'
-    )
+    text = args.socket
+    if text.lstrip().startswith(("{", "[")):
+        return spec_from_json(text, f"--socket {shorten(text)} (inline JSON)")
+    path = Path(text)
+    if not _is_file(path):
+        raise ValueError(
+            f"--socket {shorten(text)}: no such file, nor inline JSON (starting with {{ or [); "
+            f"allowed: {ALLOWED}, or a file holding one"
+        )
+    return spec_from_json(path.read_bytes(), f"--socket {path} (a file)")
+
+
+def _is_file(path: Path) -> bool:
+    """Whether ``path`` is a file (``False`` for a name the system refuses, e.g. too long)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def run(args: argparse.Namespace) -> int:

@@ -86,6 +86,21 @@ def _check_paths(args: argparse.Namespace) -> None:
         )
 
 
+def _check_policies(args: argparse.Namespace) -> None:
+    """Raise :class:`~tolins.cli.checks.OptionError` unless --init and --nominal (when
+    given) are nominal policy files."""
+    for option in ("init", "nominal"):
+        path = getattr(args, option, None)
+        if path is None:
+            continue
+        from tolins.learning.imitation.policy import load_policy
+
+        try:
+            load_policy(path, kind="nominal")
+        except ValueError as error:
+            raise checks.OptionError(f"--{option}: {error}") from None
+
+
 def _demos(args: argparse.Namespace) -> Demos | None:
     """The episodes of ``--demos``, checked against ``--env``; ``None`` without the
     option. Raises ``ValueError``."""
@@ -103,14 +118,18 @@ def _demos(args: argparse.Namespace) -> Demos | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every option, train, and say what was written."""
+    """Check every option, train, and say what was written: a bad option exits 2, a run
+    that refuses to start or go on (:class:`~tolins.learning.artefacts.RunRefused`: a
+    checkpoint of another configuration, a diverged training) 3, each with one line."""
     prog = f"tolins train {args.method}"
     try:
         configs = {cls.__name__: config_from_args(cls, args) for cls in _CONFIGS[args.method]}
         _check_paths(args)
+        _check_policies(args)
         demos = _demos(args)
-    except ValueError as error:  # OptionError too
+    except ValueError as error:  # OptionError, a config's check, a --demos dataset's
         return checks.fail(prog, error)
+    from tolins.learning.artefacts import RunRefused
     from tolins.learning.imitation import runs
 
     try:
@@ -143,7 +162,9 @@ def run(args: argparse.Namespace) -> int:
                 nominal=args.nominal,
                 resume=args.resume,
             )
-    except (ValueError, FileNotFoundError) as error:
+    except RunRefused as error:
+        return checks.refused(prog, error)
+    except FileNotFoundError as error:
         return checks.fail(prog, error)
     final = result.final
     print(

@@ -19,12 +19,24 @@ from tolins.envs.task_settings import (
     check_keywords,
 )
 from tolins.geometry.specs import SocketSpec
+from tolins.geometry.validation import is_seed
 from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics import BACKENDS, Backend, make_backend, simulator
 
 __all__ = ["BACKENDS", "ENV_KEYWORDS", "InsertionEnv"]
 #: Every keyword ``InsertionEnv`` takes.
 ENV_KEYWORDS = ("socket", "backend", "goal", "render_mode", *TASK_KEYWORDS)
+
+
+def check_reset_seed(seed: object) -> int | None:
+    """``seed`` as gymnasium's ``reset`` takes it (``None`` or a Python int); ``ValueError``
+    unless it is ``None`` or an integer ≥ 0 (numpy's as well, as the vector env takes them;
+    a bool is not a seed)."""
+    if seed is None:
+        return None
+    if not is_seed(seed):
+        raise ValueError(f"seed={seed!r} is not a seed; allowed: None or an int ≥ 0")
+    return int(seed)
 
 
 class InsertionEnv(gym.Env, SettingsAttributes):
@@ -71,7 +83,11 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     board's top. ``reset`` raises ``ValueError`` for a pose outside this range or with a
     pin inside the board, and for a goal more than 2 mm / 0.15 rad from the nominal one.
     ``control_dt`` must be a whole number of 1 ms physics steps in [2 ms, 1 s] (in one
-    physics step the re-anchored servos cannot move the workpiece).
+    physics step the re-anchored servos cannot move the workpiece). A ``robot`` holds the
+    pose it commands in the same range (its target stops at the edge, as the servos'
+    joints do); its part is off that by the arm's lag and the part's offset in the hand.
+    A socket's holes lie within 100 mm of its centre
+    (:data:`~tolins.geometry.specs.MAX_EXTENT`; its spec refuses more).
 
     **Collision**: a control step with a collision is one in which the summed normal
     force of all contacts between the board and the pins exceeded ``collision_force``
@@ -127,9 +143,11 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     :class:`~tolins.physics.randomization.PhysicsRandomization`) draws friction, contact
     stiffness, servo gains and force limit, force-sensor bias and noise and the
     initial-pose spread per episode, after the workpiece and before the pose; the values
-    are in the reset's ``info["physics"]``. ``reset`` validates every option before it
-    changes anything: a failed reset raises ``ValueError``, leaves the episode as it
-    was, and ``step`` raises ``gymnasium.error.ResetNeeded`` until a reset succeeds.
+    are in the reset's ``info["physics"]``. ``reset``'s ``seed`` is ``None`` or an integer
+    ≥ 0 (numpy's too; a bool raises, as in the vector env). ``reset`` validates every
+    option before it changes anything: a failed reset raises ``ValueError``, leaves the
+    episode as it was, and ``step`` raises ``gymnasium.error.ResetNeeded`` until a reset
+    succeeds.
 
     **Info**: ``success``, ``is_success``, ``collision``, ``n_collisions``, ``pose``
     (true ``[x, y, theta, z]``), ``wrench`` (true ``[Fx, Fy, q_theta, Fz]``),
@@ -146,8 +164,8 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     The observation then measures what the robot senses: the pose from the arm's forward
     kinematics and the nominal grasp, the wrench from its wrist sensor less the weight
     of the hand and the part; ``info["pose"]`` and ``info["wrench"]`` stay the truth, and
-    success is judged on the true pose. ``grasp_error`` (std ``[x, y, yaw]``) puts the part
-    off in the hand every episode.
+    success is judged on the true pose. ``grasp_error`` (three stds ``[x, y, yaw]``, mm, mm,
+    rad; a single number is refused) puts the part off in the hand every episode.
 
     **Closing**: ``close()`` releases the simulation and the renderer; a later ``reset``,
     ``step`` or ``render`` raises ``gymnasium.error.ClosedEnvironmentError`` (closing twice
@@ -161,6 +179,10 @@ class InsertionEnv(gym.Env, SettingsAttributes):
 
     Version history:
 
+    * v2 and v3, later in 0.6.0: the Panda's target stops at the workspace's edge, as
+      the free body's joints do (an episode whose target stays inside is unchanged bit
+      for bit); a single-number ``grasp_error``, a bool ``seed`` and a socket reaching
+      beyond 100 mm are refused.
     * v3 (tolins 0.6.0, the Panda's only): the Panda's pads hold the handle through
       stiffer contacts (the part creeps about 12 µm in the hand over an episode instead of
       about 90) and its law is eight times as stiff along x and y; version 2's compliant
@@ -279,7 +301,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         self._check_open()
-        super().reset(seed=seed)
+        super().reset(seed=check_reset_seed(seed))
         plan = self._episode.plan(self.np_random, options)
         if plan.socket is not self.backend.spec:
             self.backend.set_socket(plan.socket)

@@ -19,7 +19,7 @@ from tolins.envs.initial_pose import InitialPoseDistribution, check_initial_pose
 from tolins.envs.reward import check_reward_mode
 from tolins.geometry.defects import check_defect_sigma, check_defects, sample_defects
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
-from tolins.geometry.validation import check_int, check_positive, finite_vector
+from tolins.geometry.validation import check_int, check_positive, checked_array, finite_vector
 from tolins.geometry.workspace import PIN_LENGTH, in_holes
 from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics.panda import check_gain_range
@@ -76,8 +76,8 @@ class TaskSettings:
             the pads and square it to them, pushing a part off across them along the
             pads (up to about 3.4 times the std across, docs/robot.md), so what stays is
             an offset along the pads that is not the draw's: the part's true offset is
-            ``info["pose"] - info["sensed_pose"]``. A robot's only; each std at most
-            :data:`MAX_GRASP_ERROR_STD`.
+            ``info["pose"] - info["sensed_pose"]``. A robot's only; three stds (a single
+            number is refused), each at most :data:`MAX_GRASP_ERROR_STD`.
     """
 
     socket: SocketSpec
@@ -185,16 +185,16 @@ class TaskSettings:
 
 
 def check_grasp_error(grasp_error: Any, robot: str) -> np.ndarray | None:
-    """``grasp_error`` as a ``[x, y, yaw]`` std array (a scalar broadcasts), or ``None``;
-    ``ValueError`` unless each std is in ``[0, MAX_GRASP_ERROR_STD]`` and a robot holds the
-    part."""
+    """``grasp_error`` as a ``[x, y, yaw]`` std array, or ``None``; ``ValueError`` unless it
+    is three stds (a scalar is refused: mm and rad do not share one number), each in
+    ``[0, MAX_GRASP_ERROR_STD]``, and a robot holds the part."""
     if grasp_error is None:
         return None
     if robot == "free":
         raise ValueError("grasp_error needs a robot holding the part; allowed: robot='panda'")
     high = MAX_GRASP_ERROR_STD.tolist()
-    allowed = f"0 ≤ std ≤ {high} for [x, y, yaw] (mm, mm, rad)"
-    std = finite_vector("grasp_error", grasp_error, 3, allowed)
+    allowed = f"three stds [x, y, yaw] (mm, mm, rad), each 0 ≤ std ≤ {high}"
+    std = checked_array("grasp_error", grasp_error, (3,), allowed)
     if np.any(std < 0) or np.any(std > MAX_GRASP_ERROR_STD):
         raise ValueError(f"grasp_error={std.tolist()!r} is out of range; allowed: {allowed}")
     return std

@@ -13,10 +13,10 @@ and :func:`~tolins.geometry.specs.workpiece_dict` write them::
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Mapping
 
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
+from tolins.json_input import parse_json, shorten
 
 SPEC_TYPES: dict[str, type[CircularSocket] | type[PolygonSocket]] = {
     "CircularSocket": CircularSocket,
@@ -34,7 +34,9 @@ def spec_from_mapping(data: Mapping[str, object], *, derived: bool = True) -> So
     value the spec refuses.
     """
     if not isinstance(data, Mapping):
-        raise ValueError(f"socket {data!r} is not an object; allowed: a JSON object of fields")
+        raise ValueError(
+            f"socket {shorten(repr(data))} is not an object; allowed: a JSON object of fields"
+        )
     ignored = _DERIVED if derived else frozenset()
     fields = {key: value for key, value in data.items() if key not in ignored}
     kind = fields.pop("type", None)
@@ -60,16 +62,15 @@ def spec_from_mapping(data: Mapping[str, object], *, derived: bool = True) -> So
         raise ValueError(f"{kind}: {error}") from None
 
 
-def spec_from_json(text: str) -> SocketSpec:
-    """The spec of the JSON object ``text`` (:func:`spec_from_mapping`).
+#: What a socket in JSON may be, for error messages.
+ALLOWED = 'a JSON object of a spec\'s fields, e.g. {"rows": 2, "cols": 2}'
+
+
+def spec_from_json(text: str | bytes, source: str | None = None) -> SocketSpec:
+    """The spec of the JSON object ``text`` (bytes: UTF-8; :func:`spec_from_mapping`);
+    ``source`` names it in errors (default: the text, shortened).
 
     Raises ``ValueError`` (one line) for text that is not JSON, or a spec it does not make.
     """
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as error:
-        raise ValueError(
-            f"socket {text!r} is not JSON ({error.msg}, column {error.colno}); "
-            'allowed: a JSON object, e.g. {"rows": 2, "cols": 2}'
-        ) from None
+    data = parse_json(text, source or f"socket {shorten(repr(text))}", ALLOWED)
     return spec_from_mapping(data)

@@ -28,6 +28,13 @@ CIRCLE_HOLE_SIDES = 16
 #: model's size (and compile time) grows with both.
 MAX_PINS = 400
 MAX_SIDES = 64
+#: Largest extent (mm) of a socket: every hole, at its circumradius, within this of the
+#: socket's centre along x and y (its pins stay in their holes' cells). The presets reach
+#: 9.5 mm (the 2*8), a 20*20 socket at 10 mm pitch 95.5. The board, covering every place
+#: a pin reaches in the servo range, then stays within 130 mm of the centre, clear of the
+#: Panda's base 450 mm away, and every workpiece hangs from the same handle with the same
+#: mass (:mod:`tolins.mjcf.panda`).
+MAX_EXTENT = 100.0
 #: Largest bend of a pin (mm) along an axis with a single hole (along an axis with more,
 #: its cell bounds it): ten times the clearance of the paper's sockets.
 MAX_PIN_OFFSET = 2.0
@@ -49,6 +56,18 @@ def polygon_vertices(sides: int, circumradius: float) -> np.ndarray:
 def inradius(sides: int, circumradius: float) -> float:
     """Distance from the centre of a regular polygon to its faces."""
     return circumradius * math.cos(math.pi / sides)
+
+
+def check_extent(fields: str, hole_centers: np.ndarray, hole_circumradius: float) -> None:
+    """``ValueError`` naming ``fields`` unless every hole lies within :data:`MAX_EXTENT` of
+    the centre."""
+    extent = float(np.max(np.abs(hole_centers))) + hole_circumradius
+    if extent > MAX_EXTENT:
+        raise ValueError(
+            f"{fields}: a hole reaches {extent:.6g} mm from the socket's centre; allowed: "
+            f"every hole within {MAX_EXTENT:g} mm of it along x and y (centre plus "
+            "circumradius)"
+        )
 
 
 @dataclass(frozen=True)
@@ -120,6 +139,11 @@ class CircularSocket:
                     f"{self.hole_radius!r}; allowed: {name} ≥ {wall_span:.4g} mm "
                     f"(two hole circumradii plus a {MIN_WALL} mm wall)"
                 )
+        sizes = ", ".join(
+            f"{name}={getattr(self, name)!r}"
+            for name in ("rows", "cols", "hole_radius", "row_pitch", "col_pitch")
+        )
+        check_extent(sizes, self.hole_centers, self.hole_circumradius)
         set_(self, "pin_pitch_scale", self._validated_pitch(self.pin_pitch_scale))
         for name, limit in (("pin_burrs", MAX_BURR), ("pin_shortenings", MAX_SHORTENING)):
             set_(self, name, self._validated_per_pin(name, getattr(self, name), limit))
@@ -341,6 +365,11 @@ class PolygonSocket:
                 f"pin_circumradius={self.pin_circumradius!r} is not smaller than "
                 f"hole_circumradius={self.hole_circumradius!r}; allowed: pin < hole"
             )
+        check_extent(
+            f"hole_circumradius={self.hole_circumradius!r}",
+            self.hole_centers,
+            self.hole_circumradius,
+        )
 
     @property
     def n_pins(self) -> int:

@@ -1,4 +1,5 @@
-"""Run artefacts: atomic writes, checked loads and the metadata every artefact records."""
+"""Run artefacts: atomic writes, checked loads, the metadata every artefact records, and
+:class:`RunRefused`, what a training raises when it will not start or go on."""
 
 from __future__ import annotations
 
@@ -14,6 +15,13 @@ from typing import Any
 import torch
 
 from tolins.atomic import atomic_write
+
+
+class RunRefused(Exception):
+    """A training that will not start or go on: its checkpoint was written by another
+    configuration or cannot be resumed, it has too little to learn from, or it diverged.
+    The message is one line saying what to do instead (``tolins train`` prints it and exits
+    with status 3); not a ``ValueError``, so a bug's ``ValueError`` is never taken for one."""
 
 
 def atomic_torch_save(path: str | os.PathLike, payload: dict[str, Any]) -> Path:
@@ -76,11 +84,11 @@ def run_metadata(seed: int, **configs: Any) -> dict[str, Any]:
 def check_finite_training(
     what: str, epoch: int, loss: float, network: torch.nn.Module, learning_rate: float
 ) -> None:
-    """Raise ``ValueError`` when a training has diverged: ``loss`` (of ``epoch``) or a
+    """Raise :class:`RunRefused` when a training has diverged: ``loss`` (of ``epoch``) or a
     weight of ``network`` is NaN or infinite, so that no model of NaN weights is saved."""
     finite = math.isfinite(loss) and all(bool(p.isfinite().all()) for p in network.parameters())
     if not finite:
-        raise ValueError(
+        raise RunRefused(
             f"{what} diverged: loss {loss:g} at epoch {epoch}, weights not all finite "
             f"(learning_rate={learning_rate:g}); nothing written; allowed: a smaller "
             "--learning-rate"

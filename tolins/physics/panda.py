@@ -9,9 +9,11 @@ torques held between updates while MuJoCo steps on).
 
 The law's target moves with the commanded twist and is kept within one control step's
 travel at full speed (:data:`~tolins.paper.A_MAX` × the control period, per axis) of where
-the robot's forward kinematics put the grip site, and the law's spring force is clipped
-(:attr:`~tolins.physics.arm.Gains.force_limit`): a blocked arm pushes with at most that
-force, as the free body's servos push with at most their force limit. Unlike the
+the robot's forward kinematics put the grip site and within the workspace
+(:func:`target_range`: it stops at the edge, as the free body's joints do), and the law's
+spring force is clipped (:attr:`~tolins.physics.arm.Gains.force_limit`): a blocked arm
+pushes with at most that force, as the free body's servos push with at most their force
+limit. Unlike the
 servos, the arm is compliant: it does not stop at the first contact but presses until
 the law's force balances the board's, and it lags its target while it moves
 (``benchmarks/panda_validation.py`` measures both).
@@ -42,10 +44,11 @@ import numpy as np
 from tolins.geometry.defects import DEFECT_KINDS
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
+from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
 from tolins.mjcf import FORCE_SCALE
 from tolins.mjcf.layout import touch_addresses
 from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
-from tolins.mjcf.panda import GRAVITY, panda_world
+from tolins.mjcf.panda import GRAVITY, handle_centre_height, panda_world
 from tolins.paper import A_MAX
 from tolins.physics.arm import (
     SIDEWAYS_STIFFNESS,
@@ -166,6 +169,18 @@ def split_draw(draw: PhysicsDraw, gains: Gains) -> tuple[PhysicsDraw, Gains]:
     return contact, gains.scaled(draw.servo_gain, draw.force_limit)
 
 
+def target_range() -> tuple[np.ndarray, np.ndarray]:
+    """The law's target range ``[x, y, z, yaw]`` (mm, rad): the grip site where the robot
+    believes the part within the workspace (:data:`~tolins.geometry.workspace.POSE_LOW`,
+    ``POSE_HIGH``; the site holds the handle's centre, that far above the pin tips)."""
+    lift = handle_centre_height()
+    order = [0, 1, 3, 2]  # a pose is [x, y, theta, z]
+    low, high = POSE_LOW[order].copy(), POSE_HIGH[order].copy()
+    low[2] += lift
+    high[2] += lift
+    return low, high
+
+
 class PandaSimulations:
     """Panda worlds of one socket family, each a model and a data it does not own, reset
     and stepped together.
@@ -211,6 +226,7 @@ class PandaSimulations:
         self._part = int(model.joint("workpiece").qposadr[0])
         self._lag = A_MAX[[0, 1, 3]] * control_dt
         self._turn_lag = float(A_MAX[2]) * control_dt
+        self._low, self._high = target_range()
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error) and close
@@ -249,7 +265,7 @@ class PandaSimulations:
                 span = self.every * timestep
                 self.target[ids] += twist[:, :3] * span
                 self.yaw[ids] += twist[:, 5] * span
-                self._update_law(ids, twist)
+                self._update_law(ids, self._bound(ids, twist))
             for i in ids.tolist():
                 mujoco.mj_step(self.models[i], self.datas[i], nstep=steps)
             if read:
@@ -278,6 +294,21 @@ class PandaSimulations:
             yaw = math.atan2(frame[1, 0], frame[0, 0])
             turn = math.remainder(self.yaw[i] - yaw, math.tau)
             self.yaw[i] = yaw + min(max(turn, -self._turn_lag), self._turn_lag)
+
+    def _bound(self, ids: np.ndarray, twist: np.ndarray) -> np.ndarray:
+        """Keep each target in the workspace (:func:`target_range`), as the free body's
+        joint ranges hold its pose: a target moved beyond it is put back on its edge, and
+        the commanded twist along that axis is dropped (``twist`` itself, unchanged, while
+        every target is inside)."""
+        position, yaw = self.target[ids], self.yaw[ids]
+        beyond = np.zeros(twist.shape, dtype=bool)
+        beyond[:, :3] = (position < self._low[:3]) | (position > self._high[:3])
+        beyond[:, 5] = (yaw < self._low[3]) | (yaw > self._high[3])
+        if not beyond.any():
+            return twist
+        self.target[ids] = np.clip(position, self._low[:3], self._high[:3])
+        self.yaw[ids] = np.clip(yaw, self._low[3], self._high[3])
+        return np.where(beyond, 0.0, twist)
 
     def _update_law(self, ids: np.ndarray, twist: np.ndarray, payload: float | None = None) -> None:
         """The law's torques for simulations ``ids``, each computed as a batch of one: the

@@ -8,6 +8,8 @@ from typing import Any
 
 import gymnasium as gym
 
+from tolins.bench.store.integrity import stage_file
+from tolins.geometry.specs import SocketSpec
 from tolins.learning.agents.actors import PolicyRef, make_actor
 from tolins.rollouts.episodes import Episode, Policy, episode_to_dict, run_episode
 from tolins.rollouts.runner import Job, VectorEnvCache, run_jobs
@@ -30,8 +32,9 @@ def evaluate(
     env_kwargs: dict[str, Any] | None = None,
     inference_sigma: float | None = None,
 ) -> list[Episode]:
-    """Run the policy ``entry`` (a :class:`~tolins.learning.agents.actors.PolicyRef` or a
-    name for :func:`tolins.learning.agents.actors.make_actor`, or an actor ``observation ->
+    """Run the policy ``entry`` (a :class:`~tolins.learning.agents.actors.PolicyRef`, whose
+    file is a stage's (:func:`stage_actor`), or a name for
+    :func:`tolins.learning.agents.actors.make_actor`, or an actor ``observation ->
     action``) on ``env_id`` from each seed; the first
     ``recorded`` episodes go through :class:`tolins.record.RerunRecorder` into ``record``
     (an ``.rrd``).
@@ -50,8 +53,11 @@ def evaluate(
     """
     env_kwargs = dict(env_kwargs or {})
     env = gym.make(env_id, backend=backend, **env_kwargs)
-    named = isinstance(entry, str | PolicyRef)
-    actor = make_actor(entry, env.unwrapped.nominal_socket) if named else entry
+    socket = env.unwrapped.nominal_socket
+    if isinstance(entry, PolicyRef):
+        actor = stage_actor(entry, socket)
+    else:
+        actor = make_actor(entry, socket) if isinstance(entry, str) else entry
     wrapper = None
     if inference:
         from tolins.inference.adaptive import InferenceGuidedPolicy
@@ -89,6 +95,16 @@ def evaluate(
         finally:
             envs.close()
     return episodes
+
+
+def stage_actor(ref: PolicyRef, socket: SocketSpec) -> Policy:
+    """:func:`~tolins.learning.agents.actors.make_actor` of ``ref``, whose file (if any) a
+    training stage wrote: a file it cannot load is a
+    :class:`~tolins.bench.store.integrity.StageFileError`."""
+    if ref.path is None:
+        return make_actor(ref, socket)
+    with stage_file(ref.path):
+        return make_actor(ref, socket)
 
 
 def _label(entry: str | PolicyRef | Policy) -> str:

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from tolins.atomic import atomic_json
-from tolins.bench.jobs.policy_episodes import episodes_to_json, evaluate
+from tolins.bench.jobs.policy_episodes import episodes_to_json, evaluate, stage_actor
 from tolins.bench.store.cache import Stage, StageCache
 from tolins.bench.store.integrity import StageFileError, checked_episodes, read_json
 from tolins.bench.table.robustness import (
@@ -32,6 +32,7 @@ from tolins.bench.table.robustness import (
 )
 from tolins.bench.table.rows import CIRCLE_2X2, seeded
 from tolins.envs.tasks import DEFECT_SIGMA
+from tolins.learning.agents.actors import PolicyRef
 
 #: The file of a stage: condition id -> its episodes.
 EPISODES = "robustness.json"
@@ -97,10 +98,8 @@ def evaluate_conditions(
     entry: Any = policy.agent
     if policy_path is not None:
         from tolins.envs.tasks import task_of
-        from tolins.learning.agents.actors import PolicyRef, make_actor
 
-        socket = task_of(CIRCLE_2X2).socket
-        entry = make_actor(PolicyRef(policy.agent, policy_path), socket)
+        entry = stage_actor(PolicyRef(policy.agent, policy_path), task_of(CIRCLE_2X2).socket)
     return {
         c.id: evaluate(
             entry,
@@ -138,7 +137,7 @@ def read_stage(
     path = folder / EPISODES
     data = read_json(path)
     if not isinstance(data, dict) or set(data) != {c.id for c in conditions}:
-        raise StageFileError(f"{path}: not a stage of this table; delete its folder to rerun")
+        raise StageFileError(path, "not a stage of this table")
     return {c.id: checked_episodes(path, data[c.id], count) for c in conditions}
 
 

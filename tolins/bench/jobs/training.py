@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from tolins.bench.jobs.demonstrations import DemoSpec, dataset_folder
 from tolins.bench.store.cache import Stage, StageCache, stage_key
+from tolins.bench.store.integrity import stage_file
 from tolins.bench.table.rows import SB3_METHODS, Training, seeded
 
 if TYPE_CHECKING:
@@ -80,9 +81,9 @@ def training_stage(spec: TrainingSpec, upstream: Stage[TrainingSpec] | None) -> 
 
 
 def _config(spec: TrainingSpec, upstream: Stage[TrainingSpec] | None) -> dict[str, Any]:
-    """The stage config: the training, its settings (RS-GAIL's without its workers: the
-    results do not depend on them), its upstream's key, its demonstrations' keys and the
-    tolins version."""
+    """The stage config: the training, its settings (without RS-GAIL's workers and SB3's
+    checkpoint interval: the results do not depend on them), its upstream's key, its
+    demonstrations' keys and the tolins version."""
     import tolins
 
     config: dict[str, Any] = {
@@ -92,7 +93,9 @@ def _config(spec: TrainingSpec, upstream: Stage[TrainingSpec] | None) -> dict[st
     if upstream is not None:
         config["upstream"] = stage_key(upstream.config)
     if spec.sb3 is not None:
-        config["sb3"] = asdict(spec.sb3)
+        sb3 = asdict(spec.sb3)
+        sb3.pop("checkpoint_every")
+        config["sb3"] = sb3
         return config
     config["task"] = asdict(spec.task)
     config["demos"] = [stage_key(demo.config) for demo in spec.demos]
@@ -141,10 +144,12 @@ def _train(
     if spec.sb3 is not None:
         from tolins.learning.agents.sb3 import train_sb3
 
-        train_sb3(spec.sb3, out)
+        train_sb3(spec.sb3, out, resume=True)  # from its checkpoint, if it was interrupted
         return
     env_ids = list(training.env_ids)
     demos = _demos(cache, spec.demos, out)
+    if upstream is not None:
+        _check_upstream(upstream)
     if training.method == "bc":
         runs.run_bc(env_ids[0], spec.task, spec.bc, out, demos=demos)
     elif training.method == "rs-gail":
@@ -185,10 +190,18 @@ def _demos(cache: StageCache, stages: tuple[Stage[DemoSpec], ...], out: Path) ->
     for stage, folder in zip(stages, folders, strict=True):
         if not cache.finished(stage.name, stage.config):
             raise FileNotFoundError(f"{folder}: demonstration stage {stage.name} not run")
-    rollouts = [
-        episode
-        for stage, folder in zip(stages, folders, strict=True)
-        for episode in load_demonstrations(folder, stage.spec.env_id)
-    ]
+    rollouts = []
+    for stage, folder in zip(stages, folders, strict=True):
+        with stage_file(folder):
+            rollouts += load_demonstrations(folder, stage.spec.env_id)
     source = ",".join(os.path.relpath(f.resolve(), out.resolve()) for f in folders)
     return Demos(source, rollouts)
+
+
+def _check_upstream(policy: Path) -> None:
+    """Load the upstream stage's policy file before the training reads it: one it cannot
+    load is a :class:`~tolins.bench.store.integrity.StageFileError`, not a failed stage."""
+    from tolins.learning.imitation.policy import load_policy
+
+    with stage_file(policy):
+        load_policy(policy, kind="nominal")

@@ -18,7 +18,7 @@ import numpy as np
 
 from tolins.atomic import atomic_json
 from tolins.bench.store.cache import Stage, StageCache
-from tolins.bench.store.integrity import StageFileError, read_array, read_json
+from tolins.bench.store.integrity import StageFileError, read_array, read_json, stage_file
 from tolins.bench.table.rows import TRAININGS, seeded
 from tolins.bench.table.seeds import FIRST_SEED
 
@@ -88,8 +88,9 @@ def _episodes(spec: TrajectorySpec, policy_path: Path) -> list[dict[str, Any]]:
 
     if not (policy_path.parent / MEANS).is_file():
         return []
-    policy, _ = load_policy(policy_path, kind="nominal")
-    means = read_array(policy_path.parent / MEANS)
+    with stage_file(policy_path):
+        policy, _ = load_policy(policy_path, kind="nominal")
+    means = _means(policy_path.parent / MEANS, policy.size)
     last = len(means) - 1
     picks = sorted(set(np.linspace(0, last, spec.points).round().astype(int).tolist()))
     env = gym.make(spec.env_id, backend=spec.backend)
@@ -106,6 +107,16 @@ def _episodes(spec: TrajectorySpec, policy_path: Path) -> list[dict[str, Any]]:
     return [{"label": label, "poses": poses.tolist()} for label, poses in episodes]
 
 
+def _means(path: Path, size: int) -> np.ndarray:
+    """The CMA-ES means of every iteration in ``path``, ``(iterations, size)``, finite."""
+    means = read_array(path)
+    if means.ndim != 2 or len(means) == 0 or means.shape[1] != size:
+        raise StageFileError(path, f"shape {means.shape}; allowed: (iterations ≥ 1, {size})")
+    if not np.isfinite(means).all():
+        raise StageFileError(path, "not all finite")
+    return means
+
+
 def read_trajectories(folder: Path) -> dict[str, np.ndarray]:
     """The episodes of the trajectories stage in ``folder``: label -> poses
     ``(steps + 1, 4)``, checked."""
@@ -113,13 +124,13 @@ def read_trajectories(folder: Path) -> dict[str, np.ndarray]:
     document = read_json(path)
     episodes = document.get("trajectories") if isinstance(document, dict) else None
     if not isinstance(episodes, list):
-        raise StageFileError(f"{path}: not a trajectories stage; delete its folder to rerun")
+        raise StageFileError(path, "not a trajectories stage")
     trajectories = {}
     for i, episode in enumerate(episodes):
         label = episode.get("label") if isinstance(episode, dict) else None
         poses = episode.get("poses") if isinstance(episode, dict) else None
         if not isinstance(label, str) or not _poses(poses):
-            raise StageFileError(f"{path}: episode {i} is not a label and [x, y, theta, z] poses")
+            raise StageFileError(path, f"episode {i} is not a label and [x, y, theta, z] poses")
         trajectories[label] = np.array(poses, dtype=float)
     return trajectories
 

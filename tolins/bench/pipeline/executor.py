@@ -24,9 +24,10 @@ the node before each task); each stage is submitted once and writes its files
 atomically, the marker last (:mod:`tolins.bench.store.cache`).
 
 A job that raises stops the run: no more start, and locally the running ones stop at
-their next control step (:mod:`tolins.stopping`; a process of their own is ended), as on
-Ctrl-C; the exception is raised with the stage's name attached (:func:`failed_stage`, and
-a note in its traceback).
+their next control step (:mod:`tolins.stopping`; a process of their own is ended with
+SIGTERM, on which a deep-RL training first writes its checkpoint), as on Ctrl-C; the
+exception is raised with the stage's name attached (:func:`failed_stage`, and a note in
+its traceback).
 """
 
 from __future__ import annotations
@@ -55,6 +56,12 @@ EXECUTORS = ("local", "ray")
 #: wait without a timeout takes the interruption only when the next job ends.
 WAKE_S = 0.25
 INSTALL_RAY = "pip install 'tolins[ray]'"
+#: Seconds the check of ``--address`` waits to connect, and then for the head's answer.
+PROBE_S = 2.0
+#: HTTP/2's client connection preface and an empty SETTINGS frame (RFC 9113, 3.4); the
+#: frame type of SETTINGS.
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+_SETTINGS = 4
 
 
 @dataclass(frozen=True)
@@ -236,15 +243,21 @@ class Schedule:
 def critical_paths(jobs: Sequence[Job], costs: Mapping[str, float]) -> dict[str, float]:
     """Each job's cost plus the costliest chain of jobs that need it (a job missing from
     ``costs`` costs 1)."""
-    needed_by: dict[str, list[str]] = {job.name: [] for job in jobs}
-    for job in jobs:
-        for dep in job.deps:
+    return chain_costs({job.name: job.deps for job in jobs}, costs)
+
+
+def chain_costs(needs: Mapping[str, Sequence[str]], costs: Mapping[str, float]) -> dict[str, float]:
+    """:func:`critical_paths` of the jobs ``needs`` names (job -> the jobs it needs, a job
+    after those it needs; names outside ``needs`` are done)."""
+    needed_by: dict[str, list[str]] = {name: [] for name in needs}
+    for name, deps in needs.items():
+        for dep in deps:
             if dep in needed_by:
-                needed_by[dep].append(job.name)
+                needed_by[dep].append(name)
     path: dict[str, float] = {}
-    for job in reversed(jobs):  # a job's dependencies come before it in the list
-        after = max((path[n] for n in needed_by[job.name]), default=0.0)
-        path[job.name] = costs.get(job.name, 1.0) + after
+    for name in reversed(list(needs)):
+        after = max((path[n] for n in needed_by[name]), default=0.0)
+        path[name] = costs.get(name, 1.0) + after
     return path
 
 
@@ -297,6 +310,11 @@ class RayExecutor:
         self.placement: dict[str, dict[str, Any]] = {}
         self._pool = None
 
+    @property
+    def workers(self) -> int:
+        """How many tasks run at once: the cluster's CPUs."""
+        return max(1, int(self._ray.cluster_resources().get("CPU", 1)))
+
     def candidate_pool(self):
         """The :class:`~tolins.rollouts.ray_pool.RayPool` all trainings share (started once)."""
         if self._pool is None:
@@ -323,7 +341,7 @@ class RayExecutor:
         task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
         started = _start_queue() if on_start else None
         schedule = Schedule(jobs, costs or {})
-        slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        slots = self.workers
         by_name = {job.name: job for job in jobs}
         values: dict[str, Any] = {}
         running: dict[Any, Job] = {}  # the "where" reference of each task -> its job
@@ -347,6 +365,9 @@ class RayExecutor:
                         self.placement[job.name] = ray.get(ref)
                         value = ray.get(values[job.name])
                     except Exception as error:
+                        damaged = _stage_file_error(error)
+                        if damaged is not None:  # its one line, not Ray's remote traceback
+                            raise _mark_failed(damaged, job.name) from None
                         _mark_failed(error, job.name)
                         raise
                     if on_done:
@@ -380,17 +401,44 @@ def make_executor(
 
 
 def _probe(address: str | None) -> None:
-    """Fail fast, with what to do, when nothing listens at ``HOST:PORT``."""
+    """Fail fast, in one line with what to do, when no Ray head answers at ``HOST:PORT``:
+    nothing listens there, or what does is no gRPC server (a Ray head's GCS is one), each
+    found within :data:`PROBE_S` seconds. Else ``ray.init`` would retry for minutes,
+    printing Ray's warnings."""
     if address is None or address == "auto":
         return
     host, port = address.rsplit(":", 1)
     try:
-        socket.create_connection((host.strip("[]"), int(port)), timeout=5).close()
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=PROBE_S) as peer:
+            problem = None if _tls() else _grpc_problem(peer)
     except OSError as error:
+        problem = str(error)
+    if problem is not None:
         raise ValueError(
-            f"address={address!r}: no Ray head answers there ({error}); start one with "
+            f"address={address!r}: no Ray head answers there ({problem}); start one with "
             "`ray start --head --port=PORT` or pass --address auto"
-        ) from None
+        )
+
+
+def _grpc_problem(peer: socket.socket) -> str | None:
+    """Why ``peer`` is no gRPC server (``None``: it is one): an HTTP/2 server sends a
+    SETTINGS frame first, to the client's preface."""
+    try:
+        peer.sendall(_HTTP2_PREFACE)
+        header = b""
+        while len(header) < 9:
+            chunk = peer.recv(9 - len(header))
+            if not chunk:
+                return "it closed the connection: not a gRPC server"
+            header += chunk
+    except TimeoutError:
+        return f"no answer within {PROBE_S:g} s: not a gRPC server"
+    return None if header[3] == _SETTINGS else "it answers, but not as a gRPC server"
+
+
+def _tls() -> bool:
+    """Whether Ray speaks TLS here (``RAY_USE_TLS``): then no plain preface is answered."""
+    return os.environ.get("RAY_USE_TLS", "0").lower() in ("1", "true")
 
 
 def _connect(ray: Any, address: str | None) -> None:
@@ -404,6 +452,15 @@ def _connect(ray: Any, address: str | None) -> None:
             f"address={address!r}: could not connect to a Ray cluster ({error}); start "
             "one with `ray start --head`"
         ) from None
+
+
+def _stage_file_error(error: Exception) -> Exception | None:
+    """The :class:`~tolins.bench.store.integrity.StageFileError` a Ray task raised, which
+    Ray's ``error`` wraps (``None`` for any other error)."""
+    from tolins.bench.store.integrity import StageFileError
+
+    cause = getattr(error, "cause", None)
+    return cause if isinstance(cause, StageFileError) else None
 
 
 def _call_here(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, dict[str, Any]]:

@@ -8,20 +8,28 @@ work took on 2 cores (:data:`STEP_SECONDS`, from an idle quick bench's stage tim
 plus a fixed start-up cost. The bar's fraction is the expected cost of the
 finished stages (cached ones included) over that of all of them.
 
-The time left (:meth:`BenchProgress.remaining_s`) follows the stages as they finish: the
-expected costs of a kind (:data:`KINDS`) are scaled by measured / expected over its
-finished stages (over all finished stages while none of its own has finished), a running
-stage is credited with the time it has run, and the cost left of each kind is divided by
-how many of its stages ran at once (their measured wall time over the time they spanned:
-the local executor's evaluation threads, a Ray cluster's tasks).
+The time left (:func:`estimate_remaining`) is learnt from this machine: each stage will
+take its expected cost times a speed factor, measured over expected time of the finished
+stages like it (:func:`speed_factors`: its other seeds, its class, all), those of this
+run and those cached by an earlier run on this machine; the stages left are then laid out
+as the executor runs them, ``workers`` at a time, the costliest chain first
+(:func:`schedule_length`), so that the estimate is at least the longest chain left and at
+least the work left over the workers. Until enough has finished to tell the machine's
+speed the bar says "estimating". Every estimate at a stage's start and end goes to a log
+(``progress.jsonl`` in the bench's folder).
 """
 
 from __future__ import annotations
 
+import functools
+import heapq
+import json
+import math
 import threading
 import time
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
@@ -31,6 +39,7 @@ from tolins.bench.jobs.robustness import PREFIX as ROBUST
 from tolins.bench.jobs.trajectories import NAME as TRAJECTORIES
 from tolins.bench.jobs.trajectories import POINTS as TRAJECTORY_EPISODES
 from tolins.bench.pipeline import settings
+from tolins.bench.pipeline.executor import chain_costs
 from tolins.bench.pipeline.profiles import Profile
 from tolins.bench.table.robot import ROBOT
 from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable
@@ -42,13 +51,17 @@ KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "stu
 #: Seconds per budgeted env step (per BC sample and epoch, per study workpiece) of each
 #: kind of work on the MuJoCo backend's ``-v2`` physics, two stages side by side on 2
 #: cores: the quick bench of an idle fresh clone (2026-12-04, 7.7 min; benchmarks/README.md,
-#: "``tolins bench`` wall time"), each kind's measured stage time over its budget; the
+#: "``tolins bench`` wall time"), each kind's measured stage time over its budget, the
+#: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03); the
 #: deep-RL baselines' from the ``-v2`` paper run's trainings (PPO 280 s and SAC 1,440 s
 #: for 288,000 env steps, two side by side).
 STEP_SECONDS = {
-    "rollout": 1.06e-3,  # an evaluation, robustness or demonstration episode's step
+    "demo-rollout": 0.65e-3,  # a demonstration episode's step
+    "eval-rollout": 0.55e-3,  # an evaluation episode's step
+    "robust-rollout": 1.95e-3,  # a robustness episode's (finer grades step finer)
     "panda-rollout": 17e-3,  # a step of the Panda's table
-    "rs-gail": 1.1e-3,
+    "rs-gail-safe": 0.6e-3,  # π_n imitating the safe expert
+    "rs-gail-efficient": 2.1e-3,  # ... the efficient one: its failing candidates in contact
     "tolerance-guided": 0.41e-3,
     "ppo": 0.97e-3,  # on 8 envs in one batch
     "sac": 5.0e-3,
@@ -64,6 +77,15 @@ KINEMATIC_FACTOR = 0.4
 STAGE_SECONDS = 0.5
 #: What the inference study costs besides its workpieces (starting its processes).
 STUDY_SECONDS = 5.0
+#: The expected cost (s) the finished stages must hold before the time left is estimated.
+MIN_SEEN_S = 10.0
+#: The share of a group's (a class's) expected cost that its finished stages must hold to
+#: weigh as much as the speed of the broader one it is pulled towards.
+PRIOR_SHARE = 0.25
+#: ... but at most this many of its stages' expected cost.
+PRIOR_STAGES = 2.0
+#: A running stage past its estimate is taken to need this share of the time it has run.
+OVERRUN_SHARE = 0.1
 
 
 def stage_kind(name: str) -> str:
@@ -95,27 +117,23 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
     """The budgeted work of the stage ``name`` of ``kind`` and its unit of cost."""
     base = unseeded(name)
     if kind == "demonstrations":
-        return profile.demonstrations * HORIZON, "rollout"
+        return profile.demonstrations * HORIZON, "demo-rollout"
     if kind == "study":
         config = settings.study_settings(profile, backend)
         return config.samples + (len(config.kinds) - 1) * config.kind_samples, "study"
     if kind == "evaluation" and name == TRAJECTORIES:
-        return (TRAJECTORY_EPISODES + 1) * HORIZON, "rollout"
+        return (TRAJECTORY_EPISODES + 1) * HORIZON, "eval-rollout"
+    factor = INFERENCE_FACTOR if _with_inference(name, kind) else 1.0
     if kind == "evaluation":
-        same = (row for row in ALL_ROWS if unseeded(row_evaluation.stage_name(row, 0)) == base)
-        row = next(same, None)
-        factor = INFERENCE_FACTOR if row is not None and row.inference else 1.0
-        return profile.eval_episodes * HORIZON * factor, "rollout"
+        return profile.eval_episodes * HORIZON * factor, "eval-rollout"
     if kind in ("robustness", "robot"):
         table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
-        named = (p for p in table.policies if unseeded(robustness.stage_name(p, 0, table)) == base)
-        policy = next(named, None)
-        factor = INFERENCE_FACTOR if policy is not None and policy.inference else 1.0
         episodes = profile.robustness_episodes * len(table.conditions)
-        return episodes * HORIZON * factor, "rollout" if kind == "robustness" else "panda-rollout"
+        unit = "robust-rollout" if kind == "robustness" else "panda-rollout"
+        return episodes * HORIZON * factor, unit
     training = TRAININGS.get(base)
     if training is None:
-        return 0.0, "rollout"
+        return 0.0, "eval-rollout"
     envs = len(training.env_ids)
     if training.method in SB3_METHODS:
         return profile.deep_rl_env_steps, training.method
@@ -124,28 +142,194 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
     if training.method == "tolerance-guided":
         steps = profile.residual_iterations * profile.iteration_episodes * HORIZON * envs
         return steps, training.method
-    return profile.rs_gail_env_steps * envs, training.method
+    return profile.rs_gail_env_steps * envs, f"{training.method}-{training.expert}"
+
+
+@functools.cache
+def speed_class(name: str) -> str:
+    """The class of stages whose speed on a machine goes together: the kind of stage
+    (:func:`stage_kind`), a training's by its method (RS-GAIL, BC, PPO, ...), an
+    evaluation's by whether its policy runs inference (π_φ*)."""
+    kind = stage_kind(name)
+    training = TRAININGS.get(unseeded(name)) if kind == "training" else None
+    if training is not None:
+        return f"training {training.method}"
+    return f"{kind} with inference" if _with_inference(name, kind) else kind
+
+
+def speed_factors(
+    expected: Mapping[str, float], walls: Mapping[str, float]
+) -> Callable[[str], float] | None:
+    """How many times its expected cost each stage will take, learnt from the finished
+    stages' measured ``walls`` (s, by name; ``expected``: every stage's expected cost).
+
+    A stage's factor is the measured over expected time of the finished stages of its
+    group (its other seeds), pulled towards that of its class (:func:`speed_class`), as
+    if :data:`PRIOR_SHARE` of the group's expected cost (at most :data:`PRIOR_STAGES` of
+    its stages) had run at the class's speed; the class's is pulled towards the factor of
+    all finished stages in the same way. ``None``
+    while the finished stages hold less than :data:`MIN_SEEN_S` seconds of expected cost:
+    too little to tell this machine's speed.
+    """
+    planned: dict[str, list[float]] = {}
+    for name, cost in expected.items():
+        for level in _levels(name):
+            total = planned.setdefault(level, [0.0, 0.0])
+            total[0] += cost
+            total[1] += 1
+    sums: dict[str, list[float]] = {}
+    for name, wall in walls.items():
+        if expected.get(name, 0.0) > 0:
+            for level in ("", *_levels(name)):
+                total = sums.setdefault(level, [0.0, 0.0])
+                total[0] += wall
+                total[1] += expected[name]
+    if sums.get("", [0.0, 0.0])[1] < MIN_SEEN_S:
+        return None
+    overall = _typical(
+        [(wall, cost) for level, (wall, cost) in sums.items() if level.startswith("class ")]
+    )
+
+    def factor(name: str) -> float:
+        value = overall
+        for level in _levels(name):
+            wall, cost = sums.get(level, (0.0, 0.0))
+            cost_all, count = planned.get(level, (0.0, 1))
+            prior = cost_all * min(PRIOR_SHARE, PRIOR_STAGES / count)
+            value = (wall + prior * value) / (cost + prior) if cost + prior > 0 else value
+        return value
+
+    return factor
+
+
+def _typical(classes: list[tuple[float, float]]) -> float:
+    """The speed factor of a typical class of stages: the geometric mean of the classes'
+    measured over expected times (``(wall, cost)`` each), a class weighing less the less
+    of its expected cost has finished (half at :data:`MIN_SEEN_S`), so that the costliest
+    kind of work does not set the speed of every other."""
+    weights = [cost / (cost + MIN_SEEN_S) for _, cost in classes]
+    logs = [math.log(max(wall, 1e-9) / cost) for wall, cost in classes]
+    return math.exp(sum(w * x for w, x in zip(weights, logs, strict=True)) / sum(weights))
+
+
+def _levels(name: str) -> tuple[str, str]:
+    """The class and the group of the stage ``name``, from broad to narrow."""
+    return f"class {speed_class(name)}", f"group {unseeded(name)}"
+
+
+def estimate_remaining(
+    todo: Mapping[str, Sequence[str]],
+    expected: Mapping[str, float],
+    walls: Mapping[str, float],
+    running: Mapping[str, float],
+    workers: int,
+) -> float | None:
+    """The wall time (s) until every stage of ``todo`` has finished; ``None`` while too
+    little has finished to tell (:func:`speed_factors`).
+
+    Args:
+        todo: The stages not finished, each with the stages it needs (a stage after those
+            it needs; names outside ``todo`` have finished).
+        expected: Every stage's expected cost (s, :func:`expected_cost`), finished or not.
+        walls: The measured wall time (s) of finished stages that ran on this machine.
+        running: The stages of ``todo`` running now, each with the time (s) it has run.
+        workers: How many stages run at once.
+
+    Each stage of ``todo`` takes its expected cost times its factor, less the time it has
+    run (one that has run longer than that: :data:`OVERRUN_SHARE` of the time it has run
+    more); they are then laid out as the executor runs them (:func:`schedule_length`).
+    """
+    if not todo:
+        return 0.0
+    factor = speed_factors(expected, walls)
+    if factor is None:
+        return None
+    left = {}
+    for name in todo:
+        cost, ran = expected.get(name, STAGE_SECONDS) * factor(name), running.get(name)
+        if ran is None:
+            left[name] = cost
+        else:
+            left[name] = cost - ran if ran < cost else OVERRUN_SHARE * ran
+    return schedule_length(todo, left, expected, set(running), workers)
+
+
+def schedule_length(
+    todo: Mapping[str, Sequence[str]],
+    left: Mapping[str, float],
+    expected: Mapping[str, float],
+    running: Collection[str],
+    workers: int,
+) -> float:
+    """When the last stage of ``todo`` ends (s from now) if each takes ``left`` and they
+    run as the executors run them: ``running`` ones now, then, as ``workers`` come free, the
+    ready stage with the costliest chain behind it by ``expected`` cost first
+    (:func:`~tolins.bench.pipeline.executor.chain_costs`, the executor's order)."""
+    priority = chain_costs(todo, expected)
+    order = {name: i for i, name in enumerate(todo)}
+    waiting = {name: {d for d in deps if d in todo} for name, deps in todo.items()}
+    needed_by: dict[str, list[str]] = {name: [] for name in todo}
+    for name, deps in waiting.items():
+        for dep in deps:
+            needed_by[dep].append(name)
+    ready = [(-priority[n], order[n], n) for n, w in waiting.items() if not w and n not in running]
+    heapq.heapify(ready)
+    ends = [(left[name], name) for name in running]
+    heapq.heapify(ends)
+    now = 0.0
+    while ready or ends:
+        while ready and len(ends) < workers:
+            name = heapq.heappop(ready)[2]
+            heapq.heappush(ends, (now + left[name], name))
+        now, name = heapq.heappop(ends)
+        for later in needed_by[name]:
+            waiting[later].discard(name)
+            if not waiting[later]:
+                heapq.heappush(ready, (-priority[later], order[later], later))
+    return now
+
+
+def _with_inference(name: str, kind: str) -> bool:
+    """Whether the evaluation (robustness, Panda) stage ``name`` runs an inference-wrapped
+    policy (π_φ*)."""
+    base = unseeded(name)
+    if kind == "evaluation":
+        rows = (row for row in ALL_ROWS if unseeded(row_evaluation.stage_name(row, 0)) == base)
+        return any(row.inference for row in rows)
+    if kind in ("robustness", "robot"):
+        table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
+        names = ((p, unseeded(robustness.stage_name(p, 0, table))) for p in table.policies)
+        return any(policy.inference for policy, stage in names if stage == base)
+    return False
 
 
 @dataclass
 class _Stage:
     """What is known of one stage: expected cost, when it started (this progress's
-    clock), its measured wall time and when it finished."""
+    clock) and its measured wall time once finished."""
 
     kind: str
     expected: float
     done: bool = False
     started: float | None = None
     wall_s: float | None = None
-    finished: float | None = None
 
 
 class BenchProgress:
-    """The progress of a bench run's stages, shown as one tqdm bar.
+    """The progress of a bench run's stages, shown as one tqdm bar, and logged to a file.
 
     Args:
         expected: Every stage of the run: name -> expected cost (s, :func:`expected_cost`).
         done: The stages finished before (cached).
+        needs: The stages to run, each with the stages it needs (in the order planned);
+            ``None``: every stage not ``done``, needing none.
+        walls: The measured wall time (s) of ``done`` stages that ran on this machine
+            (their markers say so): they tell its speed before a stage of this run ends.
+        workers: How many stages run at once (the executor's workers, a cluster's CPUs).
+        log: A file to write a JSON line to at the start and at every stage's start and
+            end: the time since the start (``t``, s), the event, the stage, how many
+            stages have finished, and the estimate of the time left (``remaining_s``;
+            ``null`` while estimating).
         show: Draw the bar (on stderr); without it only the figures are kept.
         clock: Seconds, monotonic (for tests).
         refresh_s: Redraw the bar this often (s) between stage events, so that the
@@ -158,6 +342,10 @@ class BenchProgress:
         expected: Mapping[str, float],
         done: Collection[str] = (),
         *,
+        needs: Mapping[str, Sequence[str]] | None = None,
+        walls: Mapping[str, float] | None = None,
+        workers: int = 1,
+        log: str | Path | None = None,
         show: bool = True,
         clock: Callable[[], float] = time.monotonic,
         refresh_s: float | None = 2.0,
@@ -166,11 +354,20 @@ class BenchProgress:
             name: _Stage(stage_kind(name), float(cost), name in done)
             for name, cost in expected.items()
         }
-        self._total = sum(stage.expected for stage in self._stages.values())
+        self._expected = {name: stage.expected for name, stage in self._stages.items()}
+        if needs is None:
+            needs = {name: () for name, stage in self._stages.items() if not stage.done}
+        self._needs = {name: tuple(deps) for name, deps in needs.items()}
+        self._walls = {name: float(wall) for name, wall in (walls or {}).items()}
+        self._workers = workers
+        self._total = sum(self._expected.values())
         self._clock = clock
+        self._began = clock()
         self._lock = threading.RLock()
+        self._log = None if log is None else open(log, "w", encoding="utf-8")  # noqa: SIM115
         self._bar: Any = None
         self._stop = threading.Event()
+        self._event("begin", None)
         if show:
             self._bar = tqdm(
                 total=max(self._total, 1e-9),
@@ -207,13 +404,16 @@ class BenchProgress:
         """Stage ``name`` has started."""
         with self._lock:
             self._stages[name].started = self._clock()
+            self._event("start", name)
             self._draw()
 
     def finish(self, name: str, wall_s: float) -> None:
         """Stage ``name`` has finished, having taken ``wall_s`` seconds."""
         with self._lock:
             stage = self._stages[name]
-            stage.done, stage.wall_s, stage.finished = True, float(wall_s), self._clock()
+            stage.done, stage.wall_s = True, float(wall_s)
+            self._walls[name] = stage.wall_s
+            self._event("finish", name)
             self._draw()
 
     def current(self) -> str | None:
@@ -227,27 +427,39 @@ class BenchProgress:
         more = f" (+{len(running) - 1} more)" if len(running) > 1 else ""
         return f"{self._stages[name].kind} {name}{more}"
 
-    def remaining_s(self) -> float:
-        """The estimated wall time (s) until every stage has finished."""
+    def remaining_s(self) -> float | None:
+        """The estimated wall time (s) until every stage has finished
+        (:func:`estimate_remaining`); ``None`` while too little has finished to tell."""
         with self._lock:
             now = self._clock()
-            ran = [s for s in self._stages.values() if s.wall_s is not None]
-            overall = _ratio(ran, 1.0)
-            left = 0.0
-            for kind in KINDS:
-                stages = [s for s in self._stages.values() if s.kind == kind]
-                ratio = _ratio([s for s in stages if s.wall_s is not None], overall)
-                cost = sum(_left(s, ratio, now) for s in stages if not s.done)
-                left += cost / _concurrency(stages, now) if cost else 0.0
-            return left
+            todo = {n: d for n, d in self._needs.items() if not self._stages[n].done}
+            running = {
+                name: now - stage.started
+                for name, stage in self._stages.items()
+                if _running(stage) and stage.started is not None
+            }
+            return estimate_remaining(todo, self._expected, self._walls, running, self._workers)
 
     def close(self) -> None:
-        """Stop redrawing and leave the bar as it is."""
+        """Stop redrawing and leave the bar as it is; close the log."""
         self._stop.set()
         with self._lock:
             if self._bar is not None:
                 self._bar.close()
                 self._bar = None
+            if self._log is not None:
+                self._log.close()
+                self._log = None
+
+    def _event(self, event: str, name: str | None) -> None:
+        """A line of the log (if any) for ``event`` of stage ``name``."""
+        if self._log is None:
+            return
+        line = {"t": self._clock() - self._began, "event": event, "stage": name}
+        line |= {"finished": self.finished, "total": self.total}
+        line["remaining_s"] = self.remaining_s()
+        self._log.write(json.dumps(line) + "\n")
+        self._log.flush()
 
     def _tick(self, every: float) -> None:
         while not self._stop.wait(every):
@@ -263,46 +475,18 @@ class BenchProgress:
         if now is not None:
             parts.append(now)
         if self.finished < self.total:
-            parts.append(f"about {format_duration(self.remaining_s())} left")
+            left = self.remaining_s()
+            parts.append(
+                "estimating the time left"
+                if left is None
+                else f"about {format_duration(left)} left"
+            )
         self._bar.n = self.fraction * self._bar.total
         self._bar.set_postfix_str(", ".join(parts), refresh=True)
 
 
-def _ratio(stages: list[_Stage], default: float) -> float:
-    """Measured over expected wall time of finished ``stages`` (``default`` without any)."""
-    expected = sum(s.expected for s in stages)
-    if not stages or expected <= 0:
-        return default
-    return sum(s.wall_s or 0.0 for s in stages) / expected
-
-
-def _left(stage: _Stage, ratio: float, now: float) -> float:
-    """What is left of an unfinished stage (s): its scaled cost less the time it has run."""
-    cost = stage.expected * ratio
-    return cost if stage.started is None else max(cost - (now - stage.started), 0.0)
-
-
-def _concurrency(stages: list[_Stage], now: float) -> float:
-    """How many of ``stages`` ran at once: their measured (or, while running, elapsed)
-    wall time over the union of their intervals; 1 before any has run."""
-    spans = sorted(_span(s, now) for s in stages if s.finished is not None or _running(s))
-    busy = sum(end - start for start, end in spans)
-    covered, reach = 0.0, -float("inf")
-    for start, end in spans:
-        covered += max(end - max(start, reach), 0.0)
-        reach = max(reach, end)
-    return max(busy / covered, 1.0) if covered > 0 else 1.0
-
-
 def _running(stage: _Stage) -> bool:
     return stage.started is not None and not stage.done
-
-
-def _span(stage: _Stage, now: float) -> tuple[float, float]:
-    """When a stage ran (this progress's clock): to ``now`` if it still runs."""
-    if stage.finished is not None and stage.wall_s is not None:
-        return stage.finished - stage.wall_s, stage.finished
-    return stage.started or now, now
 
 
 def format_duration(seconds: float) -> str:

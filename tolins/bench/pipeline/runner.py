@@ -48,6 +48,9 @@ from tolins.bench.table.rows import select_rows
 from tolins.datasets.reader import require_minari
 from tolins.mjcf.panda import require_panda
 
+#: The log of the progress bar's estimates in the bench's folder (:class:`BenchProgress`).
+PROGRESS_LOG = "progress.jsonl"
+
 
 @dataclass(frozen=True)
 class PlannedStage:
@@ -58,6 +61,8 @@ class PlannedStage:
     """Finished before (cached): the run only reads it."""
     expected_s: float
     """Its expected wall time (s; :func:`~tolins.bench.pipeline.progress.expected_cost`)."""
+    needs: tuple[str, ...] = ()
+    """The stages to run that it runs after."""
 
 
 def run_bench(
@@ -77,9 +82,9 @@ def plan_bench(config: BenchConfig) -> list[PlannedStage]:
     profile = PROFILES[config.profile]
     plan = Plan(StageCache(Path(config.out)), log=lambda _: None, dry_run=True)
     _plan_stages(plan, config, None, local=config.executor == "local", inner_bars=False)
-    return [
-        PlannedStage(name, name in plan.done, expected_cost(name, profile, config.backend))
-        for name in [*plan.done, *(job.name for job in plan.jobs)]
+    cost = {name: expected_cost(name, profile, config.backend) for name in plan.stages}
+    return [PlannedStage(name, True, cost[name]) for name in plan.done] + [
+        PlannedStage(job.name, False, cost[job.name], job.deps) for job in plan.jobs
     ]
 
 
@@ -125,7 +130,20 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         _plan_stages(plan, config, executor.candidate_pool(), local=local, inner_bars=inner_bars)
         names = [*plan.done, *(job.name for job in plan.jobs)]
         costs = {name: expected_cost(name, profile, backend) for name in names}
-        with BenchProgress(costs, plan.done, show=progress) as stages:
+        walls = {
+            name: cache.wall_s(plan.folder(name))
+            for name in plan.done
+            if cache.ran_here(plan.folder(name))
+        }
+        with BenchProgress(
+            costs,
+            plan.done,
+            needs={job.name: job.deps for job in plan.jobs},
+            walls=walls,
+            workers=executor.workers,
+            log=out / PROGRESS_LOG,
+            show=progress,
+        ) as stages:
             plan.done.update(
                 executor.run(
                     plan.jobs,
@@ -152,7 +170,7 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         path = run.stage_folders[study.NAME] / study.STUDY
         run.study = read_json(path)
         if not isinstance(run.study, dict):
-            raise StageFileError(f"{path}: not an inference study; delete its folder to rerun")
+            raise StageFileError(path, "not an inference study")
     if config.robustness:
         run.robustness = robustness_results(run.stage_folders, profile.robustness_episodes, seeds)
     if config.robot and backend == "mujoco":

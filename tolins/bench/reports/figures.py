@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 from tolins.bench.jobs import trajectories
 from tolins.bench.reports import plots
 from tolins.bench.reports.force_plot import plot_row_profiles
-from tolins.bench.table.baselines import Curve, read_curves
+from tolins.bench.store.integrity import read_stage_curves
+from tolins.bench.table.baselines import Curve
 from tolins.bench.table.rows import ALL_ROWS, PAPER, TRAININGS
 from tolins.envs.tasks import TASKS, task_of
 
@@ -51,7 +52,7 @@ def write_figures(run: BenchRun, out: Path, step_curves: dict[str, Curve]) -> li
 def _learning_curves(run: BenchRun) -> dict[str, list[dict[str, float]]]:
     """RS-GAIL's curves of every trained policy (stage name -> rows of its ``curves.csv``)."""
     return {
-        stage: read_curves(folder / "curves.csv")
+        stage: read_stage_curves(folder / "curves.csv")
         for stage, folder in run.stage_folders.items()
         if stage.startswith("pi_") and (folder / "curves.csv").is_file()
     }

@@ -6,6 +6,7 @@ from __future__ import annotations
 import datetime
 from typing import TYPE_CHECKING, Any
 
+from tolins.bench.machine import describe_machine
 from tolins.bench.reference import PREFIX, reference_path
 from tolins.bench.reports.robustness import format_robot_section, format_section
 from tolins.bench.table.baselines import CurveSummary, summarise_curves
@@ -175,23 +176,32 @@ def _baselines_section(run: BenchRun, curves: dict[str, Any]) -> list[str]:
     ]
 
 
+def stage_minutes(stage_wall_s: dict[str, float]) -> float:
+    """The stages' wall times (s, by name) summed, in minutes: a run's work, which a
+    reader can scale by the speed of another machine and divide by its cores."""
+    return sum(stage_wall_s.values()) / 60
+
+
 def format_markdown(
     run: BenchRun,
     other: tuple[str, dict[str, Any]] | None = None,
     curves: dict[str, Any] | None = None,
+    machine: dict[str, Any] | None = None,
 ) -> str:
     """``results.md``: the table beside the paper, the claims, the deep-RL curves, the
-    study, the figures (``curves``: the env-step curves of the run's stages)."""
+    study, the figures (``curves``: the env-step curves of the run's stages; ``machine``:
+    :func:`tolins.bench.machine.machine` of the machine it ran on)."""
     config = run.config
     seeds = run.results[next(iter(run.results))]["seeds"] if run.results else 0
     episodes = run.profile.eval_episodes
+    where = "" if machine is None else f" on {describe_machine(machine)}"
     parts = [
         f"# tolins bench: Table 1 on the {config.backend} backend ({config.profile} profile)",
         "",
         f"{datetime.date.today().isoformat()}, `{_command(config)}`: "
-        f"{run.wall_s / 60:.1f} min ({len(run.cached)} of {len(run.stage_wall_s)} stages "
-        f"cached; the stages took {sum(run.stage_wall_s.values()) / 60:.1f} min when they ran, "
-        f"evaluations {config.workers} at a time). "
+        f"{run.wall_s / 60:.1f} min{where} ({len(run.cached)} of {len(run.stage_wall_s)} "
+        f"stages cached; {stage_minutes(run.stage_wall_s):.1f} stage-minutes: the stages' "
+        f"wall times summed, as they ran, evaluations {config.workers} at a time). "
         f"{seeds} training seed(s), {episodes} evaluation episodes per row and seed "
         f"(seeds {FIRST_SEED}…); ± is the std over "
         f"{'seeds' if seeds > 1 else 'episodes'} (the paper's: over its runs). "

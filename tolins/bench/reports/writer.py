@@ -11,10 +11,11 @@ from typing import TYPE_CHECKING, Any
 from tolins.atomic import atomic_json, atomic_write
 from tolins.bench.jobs import study
 from tolins.bench.jobs.row_evaluation import RECORDING, stage_name
+from tolins.bench.machine import machine
 from tolins.bench.reports.figures import write_figures
-from tolins.bench.reports.markdown import format_markdown
+from tolins.bench.reports.markdown import format_markdown, stage_minutes
 from tolins.bench.reports.robustness import plot_robustness
-from tolins.bench.store.integrity import StageFileError
+from tolins.bench.store.integrity import read_stage_curves, stage_file
 from tolins.bench.table.baselines import curves_json, env_step_curves
 from tolins.bench.table.results import read_results, results_document
 from tolins.bench.table.robot import KEY as ROBOT_KEY
@@ -53,11 +54,12 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
         written.append(plot_robustness(out / "robustness.png", run.robustness))
     else:  # an earlier run's table would read as this run's
         (out / "robustness.png").unlink(missing_ok=True)
-    curves = env_step_curves(run.stage_folders)
+    curves = env_step_curves(run.stage_folders, read_stage_curves)
     written += write_figures(run, out, curves)
     written.append(atomic_json(out / "curves.json", curves_json(curves)))
-    written.append(atomic_json(out / "run.json", _run_record(run, seeds)))
-    text = format_markdown(run, _other_backend(out, backend), curves)
+    facts = machine()
+    written.append(atomic_json(out / "run.json", _run_record(run, seeds, facts)))
+    text = format_markdown(run, _other_backend(out, backend), curves, facts)
     written.append(atomic_write(out / "results.md", lambda file: file.write(text), mode="w"))
     return written
 
@@ -68,17 +70,15 @@ def _copy(source: Path, folder: Path, name: str | None = None) -> Path:
 
 
 def _recordings(run: BenchRun, out: Path) -> list[Path]:
-    from tolins.record import RrdError, check_rrd
+    from tolins.record import check_rrd
 
     rows = {row.id: row for row in ALL_ROWS}
     written = []
     for row_id in run.results:
         source = run.stage_folders[stage_name(rows[row_id], 0)] / RECORDING
         if source.is_file():
-            try:  # a truncated recording is not shipped as the row's
+            with stage_file(source):  # a truncated recording is not shipped as the row's
                 check_rrd(source)
-            except RrdError as error:
-                raise StageFileError(f"{error}: delete {source.parent} to rerun it") from error
             written.append(_copy(source, out / "recordings", f"{row_id}.rrd"))
     return written
 
@@ -89,7 +89,7 @@ def _other_backend(out: Path, backend: str) -> tuple[str, dict[str, Any]] | None
     return (other, read_results(path)["rows"]) if path.is_file() else None
 
 
-def _run_record(run: BenchRun, seeds: int) -> dict[str, Any]:
+def _run_record(run: BenchRun, seeds: int, facts: dict[str, Any]) -> dict[str, Any]:
     import mujoco
     import torch
 
@@ -101,6 +101,8 @@ def _run_record(run: BenchRun, seeds: int) -> dict[str, Any]:
         "profile": asdict(run.profile),
         "seeds": seeds,
         "wall_s": run.wall_s,
+        "machine": facts,
+        "stage_minutes": stage_minutes(run.stage_wall_s),
         "stage_wall_s": run.stage_wall_s,
         "cached_stages": run.cached,
         "claims": {check.claim.name: check.to_json() for check in run.claims},

@@ -3,12 +3,13 @@
 A stage writes into its own folder ``DIR/stages/{name}-{key}`` (``key``: the first 12
 hex digits of the SHA-256 of its canonical JSON config). It counts as finished only once
 ``stage.json`` (config, wall time and the SHA-256 of every file it wrote) is there,
-written atomically after everything else: an interrupted stage is run again (an RS-GAIL
-stage resumes from its checkpoint), and a finished one is never run twice. A finished
-folder whose files are missing or differ from their digests is bad:
-:meth:`StageCache.discard_bad` moves it aside (``stages/.bad/``) and says why, and the
-stage runs afresh. Every file of a stage is written atomically by the one task that runs
-it (the executors submit each stage once), so any number of workers can fill one cache.
+written atomically after everything else: an interrupted stage is run again in the same
+folder (an RS-GAIL or deep-RL training resumes from its checkpoint there), and a finished
+one is never run twice. A finished folder whose files are missing or differ from their
+digests is bad: :meth:`StageCache.discard_bad` moves it aside (``stages/.bad/``) and says
+why, and the stage runs afresh. Every file of a stage is written atomically by the one
+task that runs it (the executors submit each stage once), so any number of workers can
+fill one cache.
 """
 
 from __future__ import annotations
@@ -24,7 +25,14 @@ from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from tolins.atomic import atomic_json
-from tolins.bench.store.integrity import digest_problem, folder_digests, read_json
+from tolins.bench.machine import cpu
+from tolins.bench.store.integrity import (
+    STAGES,
+    StageFileError,
+    digest_problem,
+    folder_digests,
+    read_json,
+)
 
 MARKER = "stage.json"
 
@@ -58,7 +66,7 @@ class StageCache:
     """The stage folders under ``root/stages``."""
 
     def __init__(self, root: str | Path) -> None:
-        self.root = Path(root) / "stages"
+        self.root = Path(root) / STAGES
 
     def folder(self, name: str, config: Mapping[str, Any]) -> Path:
         return self.root / f"{name}-{stage_key(config)}"
@@ -90,6 +98,7 @@ class StageCache:
             "started": started,
             "finished": time.time(),
             "host": socket.gethostname(),
+            "cpu": cpu()["description"],
             "pid": os.getpid(),
         }
         atomic_json(folder / MARKER, record, sort_keys=True)
@@ -102,8 +111,8 @@ class StageCache:
             marker = read_json(folder / MARKER)
             if not isinstance(marker, dict) or not isinstance(marker.get("wall_s"), float):
                 return f"{MARKER} is not a stage record"
-        except ValueError as error:
-            return str(error).removeprefix(f"{folder / MARKER}: ")
+        except StageFileError as error:
+            return f"{MARKER}: {error.problem}"
         return digest_problem(folder, marker.get("files"))
 
     def discard_bad(self, name: str, config: Mapping[str, Any]) -> str | None:
@@ -122,9 +131,17 @@ class StageCache:
 
     def record(self, folder: Path) -> dict[str, Any]:
         """The marker of the finished stage in ``folder``: its config, wall time, when
-        (``started``, ``finished``: Unix time), where (``host``, ``pid``) it ran, and
-        ``files`` (the SHA-256 of each file it wrote)."""
+        (``started``, ``finished``: Unix time), where (``host``, ``cpu``, ``pid``) it ran,
+        and ``files`` (the SHA-256 of each file it wrote)."""
         return read_json(folder / MARKER)
+
+    def ran_here(self, folder: Path) -> bool:
+        """Whether the finished stage in ``folder`` ran on this machine: its marker's host
+        is this one's, and so is its CPU (a marker written before markers named the CPU:
+        the host alone)."""
+        marker = self.record(folder)
+        same_cpu = marker.get("cpu", cpu()["description"]) == cpu()["description"]
+        return marker.get("host") == socket.gethostname() and same_cpu
 
     def wall_s(self, folder: Path) -> float:
         """The wall time (s) the finished stage in ``folder`` took when it ran."""

@@ -1,21 +1,28 @@
-"""Checked reads of what a bench reads back: stage files by digest, JSON and arrays that
-name the file when they are unreadable, and episodes within what an episode can be.
+"""Checked reads of what a bench reads back: stage files by digest, JSON, arrays and
+curves that name the file when they are unreadable, and episodes within what an episode
+can be.
 
 Nothing read here runs code (docs/security.md): JSON with :mod:`json`, arrays with
-``np.load(allow_pickle=False)``.
+``np.load(allow_pickle=False)``, policy files with ``torch.load(weights_only=True)``.
+Every stage file the bench reads goes through a reader here or :func:`stage_file`, so
+that a damaged one (even one whose digest was made to fit) is a :class:`StageFileError`:
+one line naming the file and the remedy, never a stage that failed.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
-import json
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from tolins.bench.table.baselines import read_curves
+from tolins.json_input import read_json_file
 from tolins.paper import HORIZON, SUCCESS_REWARD
 from tolins.rollouts.episodes import Episode, episode_from_dict
 from tolins.rollouts.forces import FORCE_FIGURES
@@ -23,10 +30,47 @@ from tolins.rollouts.forces import FORCE_FIGURES
 #: The bounds of one episode's sparse reward: −1 per step at most (every step colliding),
 #: c(1 − 1/k_max) at best (success at the first step).
 REWARD_RANGE = (-float(HORIZON), SUCCESS_REWARD * (1 - 1 / HORIZON))
+#: The folder of a bench's stage folders, ``DIR/stages``.
+STAGES = "stages"
 
 
 class StageFileError(ValueError):
-    """A file of a finished stage that is missing, unreadable or not what was written."""
+    """A file of a finished stage that is missing, unreadable or not what was written.
+
+    Its message is one line: the file, what is wrong with it (:attr:`problem`) and the
+    remedy, deleting the stage's folder (:func:`stage_folder`): the same command then runs
+    that stage again.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], problem: str) -> None:
+        super().__init__(path, problem)
+        self.path = Path(path)
+        self.problem = " ".join(str(problem).split())
+
+    def __str__(self) -> str:
+        return (
+            f"{self.path}: {self.problem}; delete its stage's folder "
+            f"{stage_folder(self.path)} and the same command runs that stage again"
+        )
+
+
+def stage_folder(path: Path) -> Path:
+    """The stage folder ``DIR/stages/NAME-KEY`` that holds ``path`` (else its folder)."""
+    return next((p for p in path.parents if p.parent.name == STAGES), path.parent)
+
+
+@contextlib.contextmanager
+def stage_file(path: str | os.PathLike[str]) -> Iterator[None]:
+    """Reading the stage file ``path`` inside: a ``ValueError`` or ``OSError`` of its
+    loader (a policy file, an SB3 zip, a dataset) is raised as :class:`StageFileError`."""
+    try:
+        yield
+    except StageFileError:
+        raise
+    except (ValueError, OSError) as error:
+        text = str(error)
+        problem = text.removeprefix(str(path)).removeprefix(":").strip() or type(error).__name__
+        raise StageFileError(path, problem) from error
 
 
 def file_digest(path: str | os.PathLike) -> str:
@@ -65,38 +109,52 @@ def digest_problem(folder: Path, recorded: Any) -> str | None:
 
 
 def read_json(path: str | os.PathLike) -> Any:
-    """The JSON document at ``path``; ``ValueError`` naming the file when it is missing,
-    truncated or not JSON."""
+    """The JSON document at ``path``; :class:`StageFileError` when it is missing,
+    truncated, not UTF-8 JSON or nested too deep."""
     path = Path(path)
     try:
-        return json.loads(path.read_text())
+        return read_json_file(path, "the JSON the stage wrote")
     except FileNotFoundError:
-        raise StageFileError(f"{path}: missing") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise StageFileError(f"{path}: not JSON, perhaps truncated ({error})") from error
+        raise StageFileError(path, "missing") from None
+    except ValueError as error:
+        raise StageFileError(path, str(error).removeprefix(f"{path}: ")) from error
 
 
 def read_array(path: str | os.PathLike) -> np.ndarray:
-    """The ``.npy`` array at ``path`` (never unpickled); ``ValueError`` naming the file."""
+    """The numeric ``.npy`` array at ``path`` (never unpickled); :class:`StageFileError`
+    for anything else."""
     try:
-        return np.load(Path(path), allow_pickle=False)
+        array = np.load(Path(path), allow_pickle=False)
     except FileNotFoundError:
-        raise StageFileError(f"{path}: missing") from None
+        raise StageFileError(path, "missing") from None
     except (ValueError, OSError, EOFError) as error:
-        raise StageFileError(f"{path}: not a numeric .npy array ({error})") from error
+        raise StageFileError(path, f"not a numeric .npy array ({error})") from error
+    if not isinstance(array, np.ndarray) or array.dtype.kind not in "fiu":
+        if not isinstance(array, np.ndarray):
+            array.close()  # an .npz archive
+        raise StageFileError(path, "not a numeric .npy array")
+    return array
+
+
+def read_stage_curves(path: str | os.PathLike) -> list[dict[str, float]]:
+    """The rows of a stage's ``curves.csv`` (:func:`~tolins.bench.table.baselines.
+    read_curves`); :class:`StageFileError` when it is unreadable."""
+    with stage_file(path):
+        return read_curves(Path(path))
 
 
 def checked_episodes(path: Path, rows: Any, count: int) -> list[Episode]:
-    """The ``count`` episodes of the JSON ``rows`` read from ``path``; ``ValueError``
-    naming the file and the first episode that is not one an episode can be."""
+    """The ``count`` episodes of the JSON ``rows`` read from ``path``;
+    :class:`StageFileError` naming the file and the first episode that is not one an
+    episode can be."""
     if not isinstance(rows, list) or len(rows) != count:
         found = len(rows) if isinstance(rows, list) else type(rows).__name__
-        raise StageFileError(f"{path}: {found} episodes; allowed: the stage's {count}")
+        raise StageFileError(path, f"{found} episodes; allowed: the stage's {count}")
     episodes = []
     for i, row in enumerate(rows):
         problem = _episode_problem(row)
         if problem:
-            raise StageFileError(f"{path}: episode {i}: {problem}")
+            raise StageFileError(path, f"episode {i}: {problem}")
         episodes.append(episode_from_dict(row))
     return episodes
 

@@ -12,7 +12,7 @@ expert steps are not counted either.
 from __future__ import annotations
 
 import csv
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,15 +25,34 @@ from tolins.bench.table.rows import SB3_METHODS, TRAININGS, seed_order, unseeded
 Curve = dict[str, np.ndarray]
 
 
+#: The columns every ``curves.csv`` has (RS-GAIL's and the deep-RL baselines').
+CURVE_COLUMNS = ("env_steps", "reward", "success")
+
+
 def read_curves(path: Path) -> list[dict[str, float]]:
-    """The rows of the ``curves.csv`` at ``path``, every value a float."""
-    with open(path) as file:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(file)]
+    """The rows of the ``curves.csv`` at ``path``, every value a float; ``ValueError``
+    naming the file when it is not one (not UTF-8 text, a value that is not a number, no
+    :data:`CURVE_COLUMNS`)."""
+    allowed = f"allowed: a CSV of numbers with columns {', '.join(CURVE_COLUMNS)}"
+    try:
+        with open(path, encoding="utf-8", newline="") as file:
+            reader = csv.DictReader(file)
+            rows = [{k: float(v) for k, v in row.items()} for row in reader]
+            missing = sorted(set(CURVE_COLUMNS) - set(reader.fieldnames or ()))
+    except (ValueError, TypeError, csv.Error) as error:  # UnicodeDecodeError too
+        raise ValueError(f"{path}: not a CSV of numbers ({error}); {allowed}") from None
+    if missing:
+        raise ValueError(f"{path}: no column {', '.join(missing)}; {allowed}")
+    return rows
 
 
-def env_step_curves(stage_folders: dict[str, Path]) -> dict[str, Curve]:
+def env_step_curves(
+    stage_folders: dict[str, Path],
+    read: Callable[[Path], list[dict[str, float]]] = read_curves,
+) -> dict[str, Curve]:
     """The curve of every RS-GAIL π_n and SB3 stage in ``stage_folders`` (stage name →
-    folder), labelled by stage name, x axis in env steps."""
+    folder), labelled by stage name, x axis in env steps; ``read`` reads a ``curves.csv``
+    (the bench's: :func:`tolins.bench.store.integrity.read_stage_curves`)."""
     curves = {}
     for stage, folder in stage_folders.items():
         training = TRAININGS.get(unseeded(stage))
@@ -42,7 +61,7 @@ def env_step_curves(stage_folders: dict[str, Path]) -> dict[str, Curve]:
             continue
         if training.method not in (*SB3_METHODS, "rs-gail"):
             continue
-        rows = read_curves(path)
+        rows = read(path)
         if not rows:
             continue
         steps = np.array([row["env_steps"] for row in rows])

@@ -4,7 +4,6 @@ versioned ``results.json`` document (:data:`SCHEMA`) that holds them."""
 from __future__ import annotations
 
 import datetime
-import json
 import math
 import os
 from pathlib import Path
@@ -15,6 +14,7 @@ import numpy as np
 from tolins.bench.table.rows import Row
 from tolins.bench.table.seeds import FIRST_SEED
 from tolins.bench.table.statistics import row_intervals
+from tolins.json_input import read_json_file, shorten
 from tolins.rollouts.episodes import Episode
 from tolins.rollouts.forces import FORCE_FIGURES
 
@@ -123,15 +123,8 @@ def read_results(path: str | os.PathLike) -> dict[str, Any]:
     A file without a schema (row entries at the top, no ``schema``) is read as the rows of
     a document whose other fields are ``None``. Raises ``ValueError`` for anything else.
     """
-    path = Path(path)
-    if path.is_dir():
-        path = path / "results.json"
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file; allowed: a results.json or its folder")
-    try:
-        document = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ValueError(f"{path}: not JSON ({error})") from error
+    path = _results_file(Path(path))
+    document = read_json_file(path, "a results.json of tolins bench or tolins evaluate")
     if not isinstance(document, dict):
         raise ValueError(f"{path}: not a results document; allowed: schema {READABLE[-1]!r}")
     if "schema" not in document and all(
@@ -150,6 +143,19 @@ def read_results(path: str | os.PathLike) -> dict[str, Any]:
         if problem:
             raise ValueError(f"{path}: row {row_id}: {problem}")
     return document
+
+
+def _results_file(path: Path) -> Path:
+    """``path``, or the ``results.json`` in it when it is a folder; ``ValueError`` when
+    there is no such file (naming a path the system refuses, e.g. too long, shortened)."""
+    try:
+        file = path / "results.json" if path.is_dir() else path
+        found, shown = file.is_file(), str(file)
+    except OSError:
+        found, shown = False, shorten(path)
+    if not found:
+        raise ValueError(f"{shown}: no such file; allowed: a results.json or its folder")
+    return file
 
 
 def entry_problem(entry: Any) -> str | None:

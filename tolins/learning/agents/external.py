@@ -16,7 +16,6 @@ for SB3 ``.zip`` files (:func:`load_sb3`), whose spaces say how.
 from __future__ import annotations
 
 import importlib
-import json
 import os
 import sys
 import traceback
@@ -130,11 +129,17 @@ def import_policy(target: str) -> Actor:
 
 def sb3_algorithm(path: str | os.PathLike) -> str:
     """The SB3 algorithm (``PPO``, ``A2C``, ``SAC``, ``TD3``) that saved the zip ``path``."""
+    from tolins.learning.agents.sb3_zip import read_data
+
     try:
         with zipfile.ZipFile(path) as archive:
-            data = json.loads(archive.read("data"))
+            raw = archive.read("data")
+    except (zipfile.BadZipFile, KeyError, OSError) as error:
+        raise ValueError(f"{path}: not a stable-baselines3 model zip ({error})") from error
+    data = read_data(path, raw)
+    try:
         module = data["policy_class"]["__module__"]
-    except (zipfile.BadZipFile, KeyError, TypeError, json.JSONDecodeError) as error:
+    except (KeyError, TypeError) as error:
         raise ValueError(f"{path}: not a stable-baselines3 model zip ({error})") from error
     if module not in _SB3_ALGORITHMS:
         raise ValueError(

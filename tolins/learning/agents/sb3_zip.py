@@ -8,18 +8,22 @@ SB3's own class and the weights ``policy.pth`` are loaded with ``weights_only=Tr
 Supported: PPO and A2C (``ActorCriticPolicy``), SAC and TD3 ``MlpPolicy`` on ``Box``
 spaces with SB3's or tolins's features extractor and a ``torch.nn`` activation; anything
 else is refused with a message (``--trust-pickle`` loads it with SB3, running its code).
+The sizes the zip declares are checked before anything is built (:func:`check_sizes`).
 """
 
 from __future__ import annotations
 
 import io
-import json
+import itertools
 import os
 import re
 import zipfile
 from typing import Any
 
 import numpy as np
+
+from tolins.json_input import parse_json, shorten
+from tolins.learning.imitation.config import HIDDEN_MAX
 
 #: ``__init__`` of the policy class (as SB3's JSON names it) -> where it lives.
 _POLICIES = {
@@ -41,6 +45,16 @@ _PLAIN = {
 #: Keyword arguments that do not change the deterministic action (dropped).
 _IGNORED = {"optimizer_class", "optimizer_kwargs"}
 _CLASS = re.compile(r"^<class '([\w.]+)'>$")
+#: What the ``data`` entry of a zip may be, for error messages.
+DATA_ALLOWED = "a stable-baselines3 model zip, as SB3's save writes it"
+#: The most hidden layers per network, critics (SAC, TD3) and parameters in all (target
+#: networks included: 2**26 float32 are 268 MB) a zip may declare; each hidden layer has
+#: 1 … ``HIDDEN_MAX`` units.
+LAYERS_MAX = 16
+CRITICS_MAX = 16
+PARAMETERS_MAX = 2**26
+#: The hidden layers each policy class builds when ``net_arch`` is not given.
+_DEFAULT_ARCH = {"ActorCriticPolicy": [64, 64], "SACPolicy": [256, 256], "TD3Policy": [400, 300]}
 
 
 class Sb3ZipError(ValueError):
@@ -54,16 +68,18 @@ def load_policy_without_pickle(path: str | os.PathLike, algorithm: str) -> Any:
 
     try:
         with zipfile.ZipFile(path) as archive:
-            data = json.loads(archive.read("data"))
+            raw = archive.read("data")
             weights = archive.read("policy.pth")
-    except (zipfile.BadZipFile, KeyError, json.JSONDecodeError, OSError) as error:
+    except (zipfile.BadZipFile, KeyError, OSError) as error:
         raise Sb3ZipError(f"{path}: not a stable-baselines3 model zip ({error})") from error
+    data = read_data(path, raw)
     policy_class = _policy_class(path, data.get("policy_class"))
     observations = _box(path, "observation_space", data.get("observation_space"))
     actions = _box(path, "action_space", data.get("action_space"))
     kwargs = _policy_kwargs(path, data.get("policy_kwargs") or {})
     if algorithm in ("PPO", "A2C") and "use_sde" in data:
         kwargs["use_sde"] = bool(data["use_sde"])
+    check_sizes(path, policy_class.__name__, kwargs, observations.shape, actions.shape)
     try:
         policy = policy_class(observations, actions, lambda _: 0.0, **kwargs)
     except (TypeError, ValueError) as error:
@@ -79,6 +95,89 @@ def load_policy_without_pickle(path: str | os.PathLike, algorithm: str) -> Any:
         ) from error
     policy.set_training_mode(False)
     return policy
+
+
+def read_data(path: Any, raw: bytes) -> dict[str, Any]:
+    """The JSON object of a zip's ``data`` entry ``raw``; :class:`Sb3ZipError` (one line)
+    for anything else."""
+    try:
+        data = parse_json(raw, f"{path}: its data entry", DATA_ALLOWED)
+    except ValueError as error:
+        raise Sb3ZipError(str(error)) from None
+    if not isinstance(data, dict):
+        raise Sb3ZipError(f"{path}: its data entry is not an object; allowed: {DATA_ALLOWED}")
+    return data
+
+
+def check_sizes(
+    path: Any,
+    policy: str,
+    kwargs: dict[str, Any],
+    observation_shape: tuple[int, ...],
+    action_shape: tuple[int, ...],
+) -> None:
+    """Raise :class:`Sb3ZipError` (one line) unless the networks ``kwargs`` declare for the
+    policy class named ``policy`` keep within the bounds: ``net_arch`` a list of hidden
+    layer widths or ``{"pi": [...], "vf"|"qf": [...]}``, each 1 … ``HIDDEN_MAX`` units and
+    at most :data:`LAYERS_MAX` of them; ``n_critics`` 1 … :data:`CRITICS_MAX`; at most
+    :data:`PARAMETERS_MAX` parameters in all."""
+    critic = "vf" if policy == "ActorCriticPolicy" else "qf"
+    arch = kwargs.get("net_arch")
+    try:
+        actor_layers, critic_layers = _arch(arch, critic, _DEFAULT_ARCH[policy])
+    except ValueError as error:
+        raise Sb3ZipError(f"{path}: net_arch={shorten(repr(arch))}: {error}") from None
+    critics = kwargs.get("n_critics", 2) if critic == "qf" else 1
+    if type(critics) is not int or not 1 <= critics <= CRITICS_MAX:
+        raise Sb3ZipError(
+            f"{path}: n_critics={shorten(repr(critics))}; allowed: an integer 1 … {CRITICS_MAX}"
+        )
+    inputs, outputs = int(np.prod(observation_shape)), int(np.prod(action_shape))
+    count = _parameters(inputs, actor_layers, 2 * outputs)  # SAC: mean and log std
+    count += critics * _parameters(inputs + outputs, critic_layers, 1)
+    if critic == "qf":
+        count *= 2  # the target networks
+    if count > PARAMETERS_MAX:
+        critics_text = f" and n_critics={critics}" if critic == "qf" else ""
+        raise Sb3ZipError(
+            f"{path}: net_arch={shorten(repr(arch))}{critics_text} on {inputs} observations "
+            f"make {count:,} parameters; allowed: at most {PARAMETERS_MAX:,}"
+        )
+
+
+def _arch(arch: Any, critic: str, default: list[int]) -> tuple[list[int], list[int]]:
+    """The actor's and the critic's hidden layers of ``net_arch`` ``arch`` (``critic``:
+    ``vf`` or ``qf``, the key of the critic); ``ValueError`` saying what is allowed."""
+    allowed = f'a list of widths or {{"pi": [...], "{critic}": [...]}}'
+    if arch is None:
+        return default, default
+    if critic == "vf" and isinstance(arch, list) and len(arch) == 1 and isinstance(arch[0], dict):
+        arch = arch[0]  # SB3 < 1.8's form, which SB3 still reads
+    if isinstance(arch, list):
+        return _widths(arch), _widths(arch)
+    keys = set(arch) if isinstance(arch, dict) else {"?"}
+    if not keys <= {"pi", critic} or (critic == "qf" and len(keys) < 2):
+        raise ValueError(f"another form; allowed: {allowed}")
+    return _widths(arch.get("pi", [])), _widths(arch.get(critic, []))
+
+
+def _widths(layers: Any) -> list[int]:
+    """``layers`` if it is a list of at most :data:`LAYERS_MAX` widths 1 … ``HIDDEN_MAX``."""
+    allowed = f"at most {LAYERS_MAX} hidden layers of 1 … {HIDDEN_MAX} units each"
+    if not isinstance(layers, list):
+        raise ValueError(f"a {type(layers).__name__} of layers; allowed: {allowed}")
+    if len(layers) > LAYERS_MAX:
+        raise ValueError(f"{len(layers)} hidden layers; allowed: {allowed}")
+    for width in layers:
+        if type(width) is not int or not 1 <= width <= HIDDEN_MAX:
+            raise ValueError(f"a layer of {shorten(repr(width))} units; allowed: {allowed}")
+    return layers
+
+
+def _parameters(inputs: int, hidden: list[int], outputs: int) -> int:
+    """The weights and biases of an MLP ``inputs → hidden… → outputs``."""
+    sizes = [inputs, *hidden, outputs]
+    return sum(a * b + b for a, b in itertools.pairwise(sizes))
 
 
 def _refuse(path: Any, what: str) -> Sb3ZipError:

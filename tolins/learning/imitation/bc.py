@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from tolins.learning.artefacts import check_finite_training, single_threaded_torch
+from tolins.learning.artefacts import RunRefused, check_finite_training, single_threaded_torch
 from tolins.learning.imitation.config import BCConfig
 from tolins.learning.imitation.demonstrations import pairs
 from tolins.learning.imitation.policy import Policy, PolicyArchitecture
@@ -55,7 +55,10 @@ def _clone(demonstrations, config, seed, on_epoch) -> BCResult:
     order = rng.permutation(len(demonstrations))
     held = max(1, round(config.held_out * len(demonstrations)))
     if held >= len(demonstrations):
-        raise ValueError(f"{len(demonstrations)} demonstrations leave none to train on")
+        raise RunRefused(
+            f"{len(demonstrations)} demonstrations leave none to train on (held_out="
+            f"{config.held_out:g} keeps {held} aside); allowed: more demonstrations"
+        )
     test = [demonstrations[i] for i in order[:held]]
     train = [demonstrations[i] for i in order[held:]]
     obs, act = pairs(train)

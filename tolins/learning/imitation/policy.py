@@ -27,7 +27,9 @@ import numpy as np
 import torch
 from torch import nn
 
+from tolins.json_input import shorten
 from tolins.learning.artefacts import atomic_torch_save, load_payload
+from tolins.learning.imitation.config import HIDDEN_MAX
 from tolins.paper import A_MAX
 
 #: Bumped when the stored layout or the meaning of the inputs changes.
@@ -39,13 +41,30 @@ EMBEDDING_SCALE = 10.0
 OBS_DIM, ACTION_DIM, EMBEDDING_DIM = 8, 4, 5
 
 
+#: The kinds of policy (:class:`PolicyArchitecture`).
+KINDS = ("nominal", "tolerance_guided")
+
+
 @dataclass(frozen=True)
 class PolicyArchitecture:
-    """What a policy checkpoint must match: kind and layer widths."""
+    """What a policy checkpoint must match: kind and layer widths (each 1 …
+    :data:`~tolins.learning.imitation.config.HIDDEN_MAX`: a π_φ of the widest layers has
+    17 M parameters, 135 MB). ``ValueError`` for any other, so that a policy file's sizes
+    are checked before anything is built from them."""
 
     kind: Literal["nominal", "tolerance_guided"] = "nominal"
     hidden: int = 32
     residual_hidden: int = 32
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"architecture.kind={self.kind!r}; allowed: {', '.join(KINDS)}")
+        for name in ("hidden", "residual_hidden"):
+            value = getattr(self, name)
+            if type(value) is not int or not 1 <= value <= HIDDEN_MAX:
+                raise ValueError(
+                    f"architecture.{name}={value!r}; allowed: an integer 1 … {HIDDEN_MAX}"
+                )
 
 
 def _mlp(sizes: list[int]) -> nn.Sequential:
@@ -154,20 +173,33 @@ def load_policy(path: str | os.PathLike, kind: str | None = None) -> tuple[Polic
     than ``kind`` (if given), or its weights do not fit the architecture it declares.
     """
     payload = load_payload(path, FORMAT)
-    stored = payload["architecture"]
-    fields = set(PolicyArchitecture.__dataclass_fields__)
-    if not isinstance(stored, dict) or set(stored) != fields:
-        raise ValueError(f"{path} declares architecture {stored!r}; allowed fields: {fields}")
-    architecture = PolicyArchitecture(**stored)
+    missing = sorted({"architecture", "metadata", "state_dict"} - set(payload))
+    if missing:
+        raise ValueError(f"{path} has no {', '.join(missing)}; allowed: a file tolins wrote")
+    architecture = _architecture(path, payload["architecture"])
     if kind is not None and architecture.kind != kind:
         raise ValueError(f"{path} holds a {architecture.kind!r} policy; allowed: {kind!r}")
     policy = Policy(architecture)
     try:
         policy.load_state_dict(payload["state_dict"])
-    except RuntimeError as error:
-        detail = " ".join(line.strip() for line in str(error).splitlines()[1:3])
+    except (RuntimeError, TypeError) as error:  # TypeError: no dict of tensors
+        lines = [line.strip() for line in str(error).splitlines()]
+        detail = " ".join(lines[1:3] or lines[:1])
         raise ValueError(
             f"{path}: its weights do not fit the architecture it declares ({architecture}): "
             f"{detail}"
         ) from error
     return policy, payload["metadata"]
+
+
+def _architecture(path: str | os.PathLike, stored: Any) -> PolicyArchitecture:
+    """The architecture a policy file declares, checked (its fields, each size and the
+    kind) before anything is built from it."""
+    fields = set(PolicyArchitecture.__dataclass_fields__)
+    if not isinstance(stored, dict) or set(stored) != fields:
+        shown = shorten(repr(stored))
+        raise ValueError(f"{path} declares architecture {shown}; allowed fields: {sorted(fields)}")
+    try:
+        return PolicyArchitecture(**stored)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None

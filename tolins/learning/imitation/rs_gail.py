@@ -48,7 +48,12 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from tolins.learning.artefacts import atomic_torch_save, load_payload, single_threaded_torch
+from tolins.learning.artefacts import (
+    RunRefused,
+    atomic_torch_save,
+    load_payload,
+    single_threaded_torch,
+)
 from tolins.learning.curves import write_curves_csv
 from tolins.learning.imitation.config import RSGailConfig
 from tolins.learning.imitation.demonstrations import pairs
@@ -176,7 +181,7 @@ def train_rs_gail(
     expert_pairs = pairs(expert)
     discriminator = Discriminator(config.discriminator_hidden, seed=seed)
     if path.exists() and not resume:
-        raise ValueError(f"{path} exists; pass resume=True (--resume) or choose another out")
+        raise RunRefused(f"{path} exists; pass resume=True (--resume) or choose another out")
     if resume and path.exists():
         state = _load(path, metadata, discriminator, config, seed)
         es, start, history = state["es"], state["iteration"], state["history"]
@@ -278,8 +283,9 @@ def _save(path, x0, told, history, means, discriminator, metadata) -> None:
 
 
 def check_resumable(out: str | Path, metadata: dict[str, Any]) -> None:
-    """Raise ``ValueError`` if ``out``'s checkpoint (when there is one) was written by a run
-    with other ``metadata``: what a caller checks before it spends time on demonstrations."""
+    """Raise :class:`~tolins.learning.artefacts.RunRefused` if ``out``'s checkpoint (when
+    there is one) cannot be read or was written by a run with other ``metadata``: what a
+    caller checks before it spends time on demonstrations."""
     path = Path(out) / CHECKPOINT
     if path.exists():
         _check_metadata(path, _payload(path), metadata)
@@ -290,8 +296,8 @@ def _payload(path: Path) -> dict[str, Any]:
         return load_payload(path, FORMAT)
     except ValueError as error:
         if "'tolins.rs_gail_run/1'" not in str(error):
-            raise
-        raise ValueError(
+            raise RunRefused(f"{error}; delete it to start the run afresh") from None
+        raise RunRefused(
             f"{error} (tolins ≤ 0.3.0 pickled its CMA-ES state, and unpickling could run code "
             f"from the file: not loaded); delete {path} to start the run afresh"
         ) from None
@@ -302,7 +308,7 @@ def _check_metadata(path: Path, payload: dict[str, Any], metadata: dict[str, Any
     wanted = {k: v for k, v in metadata.items() if k != "tolins_version"}
     if stored != wanted:
         differ = sorted(k for k in stored.keys() | wanted.keys() if stored.get(k) != wanted.get(k))
-        raise ValueError(
+        raise RunRefused(
             f"{path} was written by another run configuration (differs in: "
             f"{', '.join(differ)}); cannot resume it; allowed: --resume with the same options, "
             "or another --out"
@@ -328,7 +334,7 @@ def _load(
             raise ValueError("history or fitness values incomplete")
         discriminator.load_full_state(payload["discriminator"])
     except (KeyError, AttributeError, TypeError, ValueError, RuntimeError) as error:
-        raise ValueError(
+        raise RunRefused(
             f"{path}: not a complete RS-GAIL checkpoint ({type(error).__name__}: {error}); "
             "allowed: a checkpoint this tolins wrote; delete it to start the run afresh"
         ) from error
@@ -351,12 +357,12 @@ def _replay(
     seed: int,
 ) -> cma.CMAEvolutionStrategy:
     """The strategy after ``told`` (one row of fitness values per iteration), rebuilt from
-    the config: the same draws and updates as the interrupted run. ``ValueError`` unless
-    it passes through every stored mean (a checkpoint of another start or edited)."""
+    the config: the same draws and updates as the interrupted run. :class:`RunRefused`
+    unless it passes through every stored mean (a checkpoint of another start or edited)."""
     es = _make_es(x0, config, seed)
     for i, fitness in enumerate(told):
         if not np.array_equal(es.mean, means[i]) or len(fitness) != config.popsize:
-            raise ValueError(
+            raise RunRefused(
                 f"{path}: its CMA-ES state does not replay (iteration {i}); allowed: a "
                 "checkpoint this tolins wrote for this config; delete it to start afresh"
             )

@@ -74,7 +74,9 @@ def replayed(folder: Path) -> list[tuple[float, float | None]]:
         started = {n: s["started"] for n, s in ran.items() if n in todo and s["started"] <= now}
         running = {name: now - began for name, began in started.items()}
         walls = {**cached, **done}
-        estimates.append((now - begin, estimate_remaining(todo, expected, walls, running, workers)))
+        ages = {n: now - ran[n]["finished"] if n in ran else now - begin for n in walls}
+        left = estimate_remaining(todo, expected, walls, running, workers, ages)
+        estimates.append((now - begin, left))
     return estimates
 
 

@@ -154,7 +154,9 @@ def _dense_return(model, episodes: int = 5) -> float:
 
 @pytest.mark.slow
 def test_sac_learns_from_the_dense_reward_in_a_few_thousand_steps(tmp_path) -> None:
-    config = Sb3Config("sac", CIRCLE, backend="kinematic", env_steps=5000, curve_every=5000)
+    # measured on an AMD EPYC Zen 4: +22 over the untrained policy after 1,500 steps, +39
+    # after 2,500
+    config = Sb3Config("sac", CIRCLE, backend="kinematic", env_steps=3000, curve_every=3000)
     untrained = _dense_return(make_model(config))
     train_sb3(config, tmp_path)
     from stable_baselines3 import SAC

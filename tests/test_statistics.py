@@ -157,8 +157,8 @@ def test_intervals_are_reproducible_and_leave_numpys_global_rng_alone():
 
 def test_the_one_seed_margin_counts_the_trained_rows():
     over_episodes = difference([1.0, 2.0], [0.0, 1.0], EPISODES)
-    assert margin(over_episodes) == ONE_SEED_MARGIN == 6.7  # 2 × √2 × 2.38
-    assert margin(over_episodes, trained=1) == 4.8
+    assert margin(over_episodes) == ONE_SEED_MARGIN == 7.0  # 2 × √2 × 2.46
+    assert margin(over_episodes, trained=1) == 4.9
     assert margin(over_episodes, trained=0) == 0.0
     assert margin(difference([1.0, 2.0], [0.0, 1.0], SEEDS)) == 0.0
 
@@ -305,19 +305,19 @@ def test_one_training_seed_decides_only_beyond_the_training_noise():
         return pair.verdict, check
 
     small, check = verdict(20.8, 20.0)  # +0.8 at many standard errors: not evidence
-    assert small == INCONCLUSIVE  # nor equivalence: the training noise (±6.7) exceeds δ
-    # The seeds that would decide it at the training noise of two rows, √2 × 2.38:
+    assert small == INCONCLUSIVE  # nor equivalence: the training noise (±7.0) exceeds δ
+    # The seeds that would decide it at the training noise of two rows, √2 × 2.46:
     spread = TRAINING_SPREAD * math.sqrt(2)
     assert check.comparisons[0].seeds_to_decide == math.ceil(
         (1.959964 * spread / (SMALLEST_EFFECT - 0.8)) ** 2
     )
     assert check.basis.startswith(ONE_SEED)
     assert check.comparisons[0].difference.over == EPISODES
-    assert check.comparisons[0].margin == 6.7
+    assert check.comparisons[0].margin == 7.0
     assert verdict(32.0, 20.0)[0] == HELD
     assert verdict(20.0, 32.0)[0] == NOT_HELD
     assert verdict(26.0, 20.0)[0] == INCONCLUSIVE  # +6: within two rows' training noise
-    # π_n against an expert: one trained row, margin 4.8
+    # π_n against an expert: one trained row, margin 4.9
     assert verdict(26.0, 20.0, ("C2.3", "C2.1"))[0] == HELD
     assert verdict(24.0, 20.0, ("C2.3", "C2.1"))[0] == INCONCLUSIVE
 

@@ -84,6 +84,7 @@ MIN_SEEN_S = 10.0
 PRIOR_SHARE = 0.25
 #: ... but at most this many of its stages' expected cost.
 PRIOR_STAGES = 2.0
+HALF_LIFE_S = 300.0
 #: A running stage past its estimate is taken to need this share of the time it has run.
 OVERRUN_SHARE = 0.1
 
@@ -157,8 +158,13 @@ def speed_class(name: str) -> str:
     return f"{kind} with inference" if _with_inference(name, kind) else kind
 
 
+VARIANT = "A"
+
+
 def speed_factors(
-    expected: Mapping[str, float], walls: Mapping[str, float]
+    expected: Mapping[str, float],
+    walls: Mapping[str, float],
+    ages: Mapping[str, float] | None = None,
 ) -> Callable[[str], float] | None:
     """How many times its expected cost each stage will take, learnt from the finished
     stages' measured ``walls`` (s, by name; ``expected``: every stage's expected cost).
@@ -177,18 +183,30 @@ def speed_factors(
             total = planned.setdefault(level, [0.0, 0.0])
             total[0] += cost
             total[1] += 1
+    seen = sum(expected.get(name, 0.0) for name in walls)
+    if seen < MIN_SEEN_S:
+        return None
     sums: dict[str, list[float]] = {}
     for name, wall in walls.items():
         if expected.get(name, 0.0) > 0:
+            weight = 1.0
+            if VARIANT == "A" and ages is not None:
+                weight = 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S)
             for level in ("", *_levels(name)):
                 total = sums.setdefault(level, [0.0, 0.0])
-                total[0] += wall
-                total[1] += expected[name]
-    if sums.get("", [0.0, 0.0])[1] < MIN_SEEN_S:
-        return None
+                total[0] += weight * wall
+                total[1] += weight * expected[name]
     overall = _typical(
         [(wall, cost) for level, (wall, cost) in sums.items() if level.startswith("class ")]
     )
+    if VARIANT == "D" and ages is not None:
+        logs, weights = [], []
+        for name, wall in walls.items():
+            if expected.get(name, 0.0) > 0:
+                weights.append(expected[name] * 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S))
+                logs.append(math.log(max(wall, 1e-9) / expected[name]))
+        if sum(weights) > 0:
+            overall = math.exp(sum(w * x for w, x in zip(weights, logs)) / sum(weights))
 
     def factor(name: str) -> float:
         value = overall
@@ -199,7 +217,15 @@ def speed_factors(
             value = (wall + prior * value) / (cost + prior) if cost + prior > 0 else value
         return value
 
-    return factor
+    if VARIANT != "B" or ages is None:
+        return factor
+    logs, weights = [], []
+    for name, wall in walls.items():
+        if expected.get(name, 0.0) > 0:
+            weights.append(expected[name] * 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S))
+            logs.append(math.log(max(wall, 1e-9) / (expected[name] * factor(name))))
+    drift = math.exp(sum(w * x for w, x in zip(weights, logs)) / sum(weights)) if sum(weights) > 0 else 1.0
+    return lambda name: factor(name) * drift
 
 
 def _typical(classes: list[tuple[float, float]]) -> float:
@@ -223,6 +249,7 @@ def estimate_remaining(
     walls: Mapping[str, float],
     running: Mapping[str, float],
     workers: int,
+    ages: Mapping[str, float] | None = None,
 ) -> float | None:
     """The wall time (s) until every stage of ``todo`` has finished; ``None`` while too
     little has finished to tell (:func:`speed_factors`).
@@ -241,7 +268,7 @@ def estimate_remaining(
     """
     if not todo:
         return 0.0
-    factor = speed_factors(expected, walls)
+    factor = speed_factors(expected, walls, ages)
     if factor is None:
         return None
     left = {}

@@ -196,12 +196,17 @@ def test_sigint_checkpoints_then_interrupts_and_the_stage_resumes(
         return step(self)
 
     monkeypatch.setattr(sb3._Checkpoints, "_on_step", on_step)
-    with pytest.raises(KeyboardInterrupt):
-        train_job(tmp_path, sac_stage, None, False, None)
+    # Ctrl-C as an interactive run gets it (a pytest-xdist worker ignores SIGINT)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            train_job(tmp_path, sac_stage, None, False, None)
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    finally:
+        signal.signal(signal.SIGINT, previous)
     monkeypatch.undo()
     folder = _folder(tmp_path, sac_stage)
     assert _steps(folder / CHECKPOINT) == 1030 and not _finished(folder)
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
     train_job(tmp_path, sac_stage, None, False, None)
     _assert_identical(_saved(folder), _saved(uninterrupted))
     assert _curve(folder) == _curve(uninterrupted)

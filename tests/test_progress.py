@@ -108,6 +108,22 @@ def test_a_training_learns_from_its_other_seeds_and_an_evaluation_from_evaluatio
     assert speed_class("eval-C4.1-seed0") == "evaluation"
 
 
+def test_the_speed_follows_the_machine_as_its_load_changes():
+    expected = {f"eval-C1.1-seed{s}": 10.0 for s in range(3)} | {"eval-C1.2-seed0": 10.0}
+    walls = {"eval-C1.1-seed0": 40.0, "eval-C1.1-seed1": 40.0, "eval-C1.1-seed2": 10.0}
+
+    def factor(old: float) -> float:
+        """Seeds 0 and 1 ended ``old`` s ago under load, seed 2 just now without."""
+        ages = {"eval-C1.1-seed0": old, "eval-C1.1-seed1": old, "eval-C1.1-seed2": 0.0}
+        factors = speed_factors(expected, walls, ages)
+        assert factors is not None
+        return factors("eval-C1.2-seed0")
+
+    assert factor(0.0) == pytest.approx(3.0)  # all alike: 90 s for 30
+    assert 1.25 < factor(60.0) < 3.0  # a minute ago: still much of it
+    assert 1.0 < factor(600.0) < 1.25  # ten minutes ago: mostly the speed of now
+
+
 @pytest.fixture(scope="module")
 def quick_plan(tmp_path_factory) -> tuple[dict[str, tuple[str, ...]], dict[str, float]]:
     """The stages of a quick bench from an empty folder (each with the stages it needs)
@@ -221,8 +237,8 @@ def test_progress_counts_every_stage_names_the_current_one_and_estimates_the_res
     progress.finish("eval-C1.1-seed1", 5.0)
     assert progress.fraction == pytest.approx(30 / 55)
     # robustness and the study at a typical class's speed: BC's 2 and the evaluations' 1
-    # weigh alike (geometric mean)
-    assert progress.remaining_s() == pytest.approx(math.sqrt(2) * (5 + 20))  # one worker
+    # weigh alike (geometric mean; BC's, 5 s older, a little less)
+    assert progress.remaining_s() == pytest.approx(math.sqrt(2) * (5 + 20), rel=0.02)
     progress.start("robust-safe-seed0")
     clock.now = 30.0
     assert progress.current() == "robustness robust-safe-seed0"

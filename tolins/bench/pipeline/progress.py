@@ -84,7 +84,10 @@ MIN_SEEN_S = 10.0
 PRIOR_SHARE = 0.25
 #: ... but at most this many of its stages' expected cost.
 PRIOR_STAGES = 2.0
-HALF_LIFE_S = 300.0
+#: A finished stage's evidence of the machine's speed halves every this many seconds...
+HALF_LIFE_S = 120.0
+#: ... or this share of the run so far, whichever is longer.
+HALF_LIFE_SHARE = 0.1
 #: A running stage past its estimate is taken to need this share of the time it has run.
 OVERRUN_SHARE = 0.1
 
@@ -158,9 +161,6 @@ def speed_class(name: str) -> str:
     return f"{kind} with inference" if _with_inference(name, kind) else kind
 
 
-VARIANT = "A"
-
-
 def speed_factors(
     expected: Mapping[str, float],
     walls: Mapping[str, float],
@@ -172,10 +172,13 @@ def speed_factors(
     A stage's factor is the measured over expected time of the finished stages of its
     group (its other seeds), pulled towards that of its class (:func:`speed_class`), as
     if :data:`PRIOR_SHARE` of the group's expected cost (at most :data:`PRIOR_STAGES` of
-    its stages) had run at the class's speed; the class's is pulled towards the factor of
-    all finished stages in the same way. ``None``
-    while the finished stages hold less than :data:`MIN_SEEN_S` seconds of expected cost:
-    too little to tell this machine's speed.
+    its stages) had run at the class's speed; the class's is pulled towards that of a
+    typical class (:func:`_typical`) in the same way. A finished stage weighs half as much
+    for every :data:`HALF_LIFE_S`, or :data:`HALF_LIFE_SHARE` of the oldest of its
+    ``ages`` (s since each ended), whichever is longer, that has passed since it ended:
+    the factors follow the machine as its load changes. ``None`` while the finished
+    stages hold less than :data:`MIN_SEEN_S` seconds of expected cost: too little to tell
+    this machine's speed.
     """
     planned: dict[str, list[float]] = {}
     for name, cost in expected.items():
@@ -186,27 +189,19 @@ def speed_factors(
     seen = sum(expected.get(name, 0.0) for name in walls)
     if seen < MIN_SEEN_S:
         return None
+    ages = ages or {}
+    life = max(HALF_LIFE_S, HALF_LIFE_SHARE * max(ages.values(), default=0.0))
     sums: dict[str, list[float]] = {}
     for name, wall in walls.items():
         if expected.get(name, 0.0) > 0:
-            weight = 1.0
-            if VARIANT == "A" and ages is not None:
-                weight = 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S)
-            for level in ("", *_levels(name)):
+            weight = 0.5 ** (ages.get(name, 0.0) / life)
+            for level in _levels(name):
                 total = sums.setdefault(level, [0.0, 0.0])
                 total[0] += weight * wall
                 total[1] += weight * expected[name]
     overall = _typical(
         [(wall, cost) for level, (wall, cost) in sums.items() if level.startswith("class ")]
     )
-    if VARIANT == "D" and ages is not None:
-        logs, weights = [], []
-        for name, wall in walls.items():
-            if expected.get(name, 0.0) > 0:
-                weights.append(expected[name] * 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S))
-                logs.append(math.log(max(wall, 1e-9) / expected[name]))
-        if sum(weights) > 0:
-            overall = math.exp(sum(w * x for w, x in zip(weights, logs)) / sum(weights))
 
     def factor(name: str) -> float:
         value = overall
@@ -217,15 +212,7 @@ def speed_factors(
             value = (wall + prior * value) / (cost + prior) if cost + prior > 0 else value
         return value
 
-    if VARIANT != "B" or ages is None:
-        return factor
-    logs, weights = [], []
-    for name, wall in walls.items():
-        if expected.get(name, 0.0) > 0:
-            weights.append(expected[name] * 0.5 ** (ages.get(name, 0.0) / HALF_LIFE_S))
-            logs.append(math.log(max(wall, 1e-9) / (expected[name] * factor(name))))
-    drift = math.exp(sum(w * x for w, x in zip(weights, logs)) / sum(weights)) if sum(weights) > 0 else 1.0
-    return lambda name: factor(name) * drift
+    return factor
 
 
 def _typical(classes: list[tuple[float, float]]) -> float:
@@ -261,6 +248,8 @@ def estimate_remaining(
         walls: The measured wall time (s) of finished stages that ran on this machine.
         running: The stages of ``todo`` running now, each with the time (s) it has run.
         workers: How many stages run at once.
+        ages: How long ago (s) each stage of ``walls`` ended (:func:`speed_factors`);
+            ``None``: all just now.
 
     Each stage of ``todo`` takes its expected cost times its factor, less the time it has
     run (one that has run longer than that: :data:`OVERRUN_SHARE` of the time it has run
@@ -390,6 +379,7 @@ class BenchProgress:
         self._total = sum(self._expected.values())
         self._clock = clock
         self._began = clock()
+        self._ended = dict.fromkeys(self._walls, self._began)  # cached: at the run's start
         self._lock = threading.RLock()
         self._log = None if log is None else open(log, "w", encoding="utf-8")  # noqa: SIM115
         self._bar: Any = None
@@ -440,6 +430,7 @@ class BenchProgress:
             stage = self._stages[name]
             stage.done, stage.wall_s = True, float(wall_s)
             self._walls[name] = stage.wall_s
+            self._ended[name] = self._clock()
             self._event("finish", name)
             self._draw()
 
@@ -465,7 +456,10 @@ class BenchProgress:
                 for name, stage in self._stages.items()
                 if _running(stage) and stage.started is not None
             }
-            return estimate_remaining(todo, self._expected, self._walls, running, self._workers)
+            ages = {name: now - ended for name, ended in self._ended.items()}
+            return estimate_remaining(
+                todo, self._expected, self._walls, running, self._workers, ages
+            )
 
     def close(self) -> None:
         """Stop redrawing and leave the bar as it is; close the log."""

@@ -111,8 +111,10 @@ print(json.dumps(sorted(names)))
 """
 
 
-def _loaded(module: str, *, bare: bool = True) -> set[str]:
-    """Names of tolins (and mujoco, gymnasium, torch) modules loaded by importing ``module``."""
+@functools.cache
+def _loaded(module: str, *, bare: bool = True) -> frozenset[str]:
+    """Names of tolins (and mujoco, gymnasium, torch) modules loaded by importing ``module``
+    (a fresh interpreter each, once per module for the file)."""
     result = subprocess.run(
         [sys.executable, "-c", _PROBE.format(module=module, bare=bare)],
         capture_output=True,
@@ -121,10 +123,10 @@ def _loaded(module: str, *, bare: bool = True) -> set[str]:
         check=False,
     )
     assert result.returncode == 0, result.stderr
-    return set(json.loads(result.stdout.strip().splitlines()[-1]))
+    return frozenset(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
-def _probe(module: str) -> set[str]:
+def _probe(module: str) -> frozenset[str]:
     """What importing ``module`` in a bare package loads, checked to hold ``module``: the
     probe did see it imported."""
     loaded = _loaded(module)
@@ -132,7 +134,7 @@ def _probe(module: str) -> set[str]:
     return loaded
 
 
-def _tolins(names: set[str]) -> set[str]:
+def _tolins(names: frozenset[str]) -> set[str]:
     return {name for name in names if name == "tolins" or name.startswith("tolins.")}
 
 

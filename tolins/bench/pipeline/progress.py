@@ -52,12 +52,14 @@ KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "stu
 #: kind of work on the MuJoCo backend's ``-v2`` physics, two stages side by side on 2
 #: cores: the quick bench of an idle fresh clone (2026-12-04, 7.7 min; benchmarks/README.md,
 #: "``tolins bench`` wall time"), each kind's measured stage time over its budget, the
-#: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03); the
-#: deep-RL baselines' from the ``-v2`` paper run's trainings (PPO 280 s and SAC 1,440 s
-#: for 288,000 env steps, two side by side).
+#: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03) and two
+#: quick benches on a loaded 2-core Zen 4 VM (2026-12-07; benchmarks/README.md, "How
+#: well the progress bar foresees the time left"); the deep-RL baselines' from the
+#: ``-v2`` paper run's trainings (PPO 280 s and SAC 1,440 s for 288,000 env steps, two
+#: side by side).
 STEP_SECONDS = {
     "demo-rollout": 0.65e-3,  # a demonstration episode's step
-    "eval-rollout": 0.55e-3,  # an evaluation episode's step
+    "eval-rollout": 0.4e-3,  # an evaluation episode's step
     "robust-rollout": 1.95e-3,  # a robustness episode's (finer grades step finer)
     "panda-rollout": 17e-3,  # a step of the Panda's table
     "rs-gail-safe": 0.6e-3,  # π_n imitating the safe expert

@@ -10,8 +10,9 @@ finished stages (cached ones included) over that of all of them.
 
 The time left (:func:`estimate_remaining`) is learnt from this machine: each stage will
 take its expected cost times a speed factor, measured over expected time of the finished
-stages like it (:func:`speed_factors`: its other seeds, its class, all), those of this
-run and those cached by an earlier run on this machine; the stages left are then laid out
+stages like it (:func:`speed_factors`: its other seeds, its class, a typical class),
+those of this run and those cached by an earlier run on this machine, the recent ones
+weighing more (the machine's load changes); the stages left are then laid out
 as the executor runs them, ``workers`` at a time, the costliest chain first
 (:func:`schedule_length`), so that the estimate is at least the longest chain left and at
 least the work left over the workers. Until enough has finished to tell the machine's

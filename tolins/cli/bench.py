@@ -84,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, FileNotFoundError, RunRefused) as error:
         stage = failed_stage(error)
         if isinstance(error, RunRefused):  # a training that will not go on: say why
-            return checks.refused(f"tolins bench: stage {stage}", error)
+            where = "tolins bench" if stage is None else f"tolins bench: stage {stage}"
+            return checks.refused(where, error)
         if stage is None or isinstance(error, StageFileError):  # refused, or a file damaged
             return checks.fail("tolins bench", error)
         traceback.print_exception(error)

@@ -14,6 +14,7 @@ from tolins.envs.tasks import ROBOT_TASKS, TASKS, env_ids, task_of
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW, XY_RANGE
 from tolins.mjcf.panda import FIRM_GRIP_IMPEDANCE
 from tolins.physics.arm import SIDEWAYS_STIFFNESS, Gains
+from tolins.physics.mujoco import max_threads
 from tolins.physics.panda import (
     DROPPED,
     STIFF_SIDEWAYS_MIN_RATE,
@@ -158,17 +159,19 @@ def test_bad_robot_settings_raise_naming_what_is_allowed(kwargs: dict, message: 
 
 
 def test_the_vector_env_steps_each_panda_as_the_single_env_does(env: InsertionEnv) -> None:
-    vector = tolins.make_vec(env.spec.id, 2, **QUIET)
-    observations, _ = vector.reset(seed=[5, 6])
-    for i in range(2):
+    # Three simulations on every thread there is: one thread steps two of them.
+    vector = tolins.make_vec(env.spec.id, 3, num_threads=max_threads(), **QUIET)
+    observations, _ = vector.reset(seed=[5, 6, 7])
+    for i in range(3):
         single, _ = env.reset(seed=5 + i)
         np.testing.assert_array_equal(single, observations[i])
-    actions = np.array([[1.0, 0.0, 0.05, -2.5], [-1.0, 2.0, 0.0, -1.0]])
-    stepped, *_ = vector.step(actions)
-    for i in range(2):
+    actions = np.array([[1.0, 0.0, 0.05, -2.5], [-1.0, 2.0, 0.0, -1.0], [0.0, 0.0, 0.0, -2.5]])
+    stepped = [vector.step(actions)[0], vector.step(actions[::-1])[0]]
+    for i in range(3):
         env.reset(seed=5 + i)
-        single, *_ = env.step(actions[i])
-        np.testing.assert_array_equal(single, stepped[i])
+        for k, step_actions in enumerate([actions, actions[::-1]]):
+            single, *_ = env.step(step_actions[i])
+            np.testing.assert_array_equal(single, stepped[k][i])
     vector.close()
 
 

@@ -45,6 +45,8 @@ from tolins.mjcf.panda import (
     WRIST_TORQUE,
     handle_centre_height,
 )
+from tolins.physics.compiled_law import law_torques, pack_gains
+from tolins.physics.servo import run_plan
 
 #: The IK's start (rad): of the grasps over the board's centre reached from 300 random
 #: starts within the joint limits, the one farthest from every limit (0.63 rad). Grasps
@@ -116,6 +118,8 @@ class Arm:
         self.flange = model.site(PREFIX + FLANGE).id
         self.hand_mass = float(model.body_subtreemass[model.body(PREFIX + HAND).id])
         self.wrist_sensors = [model.sensor(name).adr[0] for name in (WRIST_FORCE, WRIST_TORQUE)]
+        #: What the compiled law reads of the arm: the site, then qpos, dof and motor ids.
+        self.index = np.concatenate([[self.site], self.qpos, self.dof, self.motors]).astype(np.intp)
         self._jac = np.zeros((6, model.nv))  # translation rows, then rotation rows
         self._mass = np.zeros((model.nv, model.nv))
         self._block = np.ix_(self.dof, self.dof)
@@ -226,10 +230,62 @@ class Arm:
         )
         return np.clip(tau, -self.limit, self.limit)
 
+    def law_gains(self, gains: Gains, payload: float) -> np.ndarray:
+        """``gains`` and the weight of ``payload`` (kg) as the compiled law reads them."""
+        stiffness = np.asarray(gains.stiffness, dtype=float)
+        held = -payload * GRAVITY
+        return pack_gains(stiffness, gains.damping, np.asarray(gains.force_limit), gains.null, held)
+
+    def apply_law(
+        self,
+        model: mujoco.MjModel,
+        inputs: LawInputs,
+        state: np.ndarray,
+        gains: np.ndarray,
+        advance: float = 0.0,
+        bounds: np.ndarray | None = None,
+    ) -> None:
+        """Set the simulation's motors to the compiled law's torques (:meth:`batch_torques`
+        within rounding, :func:`~tolins.physics.compiled_law.law_torques`): ``state`` its
+        target, yaw, twist and posture (:data:`~tolins.physics.compiled_law.STATE`), first
+        moved ``advance`` s along the twist within ``bounds``; ``gains`` of
+        :meth:`law_gains`."""
+        data = inputs.data
+        mujoco.mj_jacSite(model, data, inputs.jacp, inputs.jacr, self.site)
+        mujoco.mj_fullM(model, data, inputs.full)
+        bounds = _UNBOUNDED if bounds is None else bounds
+        law_torques(
+            inputs.jac,
+            inputs.full,
+            *inputs.arrays,
+            self.index,
+            gains,
+            state,
+            self.limit,
+            advance,
+            bounds,
+        )
+
     def _arm_mass(self, data: mujoco.MjData) -> np.ndarray:
         """The arm's ``(7, 7)`` block of the joint-space inertia (a copy)."""
         mujoco.mj_fullM(self.model, data, self._mass)
         return self._mass[self._block]
+
+
+_UNBOUNDED = np.array([[-np.inf] * 4, [np.inf] * 4])
+
+
+class LawInputs:
+    """What the compiled law reads and writes of one simulation's data, bound once (MuJoCo's
+    arrays are views of the data's memory), with the law's scratch matrices."""
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        self.data = data
+        self.arrays = (data.qpos, data.qvel, data.site_xpos, data.site_xmat, data.qfrc_bias)
+        self.arrays += (data.ctrl,)
+        self.jac = np.zeros((6, model.nv))
+        self.jacp, self.jacr = self.jac[:3], self.jac[3:]
+        self.full = np.zeros((model.nv, model.nv))
 
 
 def place_grasp(
@@ -281,12 +337,15 @@ def close_fingers(
     try:
         data.ctrl[arm.finger_motors] = -force / FORCE_SCALE
         steps = round(seconds / model.opt.timestep)
-        for start in range(0, steps, every):
-            law()
-            mujoco.mj_step(model, data, nstep=min(every, steps - start))
+        plan = [(min(every, steps - start), True, False) for start in range(0, steps, every)]
+        run_plan(model, data, plan, law, _nothing)
     finally:
         model.opt.gravity[:] = gravity
     mujoco.mj_forward(model, data)
+
+
+def _nothing() -> None:
+    pass
 
 
 def nominal_pose(data: mujoco.MjData, arm: Arm) -> np.ndarray:

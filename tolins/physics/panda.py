@@ -37,6 +37,7 @@ import dataclasses
 import functools
 import itertools
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
@@ -50,10 +51,12 @@ from tolins.mjcf.layout import touch_addresses
 from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
 from tolins.mjcf.panda import GRAVITY, handle_centre_height, panda_world
 from tolins.paper import A_MAX
+from tolins.physics import compiled_law
 from tolins.physics.arm import (
     SIDEWAYS_STIFFNESS,
     Arm,
     Gains,
+    LawInputs,
     close_fingers,
     grip_rotation,
     nominal_pose,
@@ -61,10 +64,12 @@ from tolins.physics.arm import (
     wrist_wrench,
 )
 from tolins.physics.compiled import SocketCache
+from tolins.physics.compiled_law import STATE, STATE_SIZE, advance_target
+from tolins.physics.mujoco import check_threads, default_threads
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import contact_chunks, control_plan
-from tolins.physics.servo import simulation_fault
+from tolins.physics.servo import run_plan, simulation_fault
 from tolins.physics.versions import physics_version as physics_version_of
 
 #: A batch of one's simulation ids.
@@ -185,6 +190,11 @@ class PandaSimulations:
     """Panda worlds of one socket family, each a model and a data it does not own, reset
     and stepped together.
 
+    A control step runs each simulation on its own (:func:`~tolins.physics.servo.run_plan`:
+    the compiled law, then MuJoCo's physics steps, in chunks), the simulations of a batch
+    split over ``num_threads`` threads: both release the GIL, and a simulation steps the
+    same bits on any thread and in a batch of any size.
+
     Args:
         arm: The arm of the family's nominal model (every model of the family has its
             addresses and kinematic tree).
@@ -193,6 +203,7 @@ class PandaSimulations:
         control_dt: Control period (s).
         law_rate: Updates of the law per second (:func:`check_law_rate`).
         contact_checks: Contact-force reads per control step, as the free body's.
+        num_threads: Threads a control step of several simulations runs on.
     """
 
     def __init__(
@@ -203,15 +214,22 @@ class PandaSimulations:
         control_dt: float,
         law_rate: int = LAW_RATE,
         contact_checks: int | None = None,
+        num_threads: int = 1,
     ) -> None:
         self.arm, self.models, self.datas = arm, models, datas
         model = arm.model
         self.every = check_law_rate(model, law_rate)
         self.nstep, self.checks = control_plan(model, control_dt, contact_checks)
+        self.plan = update_plan(self.nstep, self.checks, self.every)
+        self.num_threads = num_threads
         n = len(datas)
-        self.target = np.zeros((n, 3))
-        self.yaw = np.zeros(n)
-        self.posture = np.zeros((n, len(arm.dof)))
+        #: Each simulation's law state (:data:`~tolins.physics.compiled_law.STATE`); the
+        #: target, yaw, twist and posture below are views of it.
+        self.law_state = np.zeros((n, STATE_SIZE))
+        self.target = self.law_state[:, STATE["target"]]
+        self.yaw = self.law_state[:, STATE["yaw"]]
+        self.twist = self.law_state[:, STATE["twist"]]
+        self.posture = self.law_state[:, STATE["posture"]]
         self.grasp = np.zeros((n, 3))
         #: Each simulation's gains (a randomised draw scales them).
         self.gains = [arm.gains] * n
@@ -226,19 +244,29 @@ class PandaSimulations:
         self._part = int(model.joint("workpiece").qposadr[0])
         self._lag = A_MAX[[0, 1, 3]] * control_dt
         self._turn_lag = float(A_MAX[2]) * control_dt
-        self._low, self._high = target_range()
+        self._bounds = np.stack(target_range())
+        self._span = self.every * model.opt.timestep
+        self._inputs: list[LawInputs | None] = [None] * n
+        self._packed_gains: list[dict[float, tuple[Gains, np.ndarray]]] = [{} for _ in range(n)]
+        self._pool: ThreadPoolExecutor | None = None
+        #: Whether the law runs compiled (numba), else in numpy: the same law within
+        #: rounding (:mod:`tolins.physics.compiled_law`), the numpy one about 15 times slower.
+        self.compiled = compiled_law.AVAILABLE
+
+    def __getstate__(self) -> dict[str, object]:
+        # Threads and the law's bindings to the datas' memory are this process's own.
+        return {**self.__dict__, "_pool": None, "_inputs": [None] * len(self.datas)}
 
     def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
         """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error) and close
         the fingers on it: the state then. One simulation after another: the fingers close
         with gravity off in the model, which simulations may share."""
-        still = np.zeros((1, 6))
         for k, i in enumerate(ids.tolist()):
             model, data = self.models[i], self.datas[i]
             target, rot, posture = place_grasp(model, data, self.arm, poses[k], self.grasp[i])
             self.target[i], self.posture[i] = target, posture
             self.yaw[i] = math.atan2(rot[1, 0], rot[0, 0])
-            one = ids[k : k + 1]
+            self.twist[i] = 0.0
             close_fingers(
                 model,
                 data,
@@ -246,7 +274,7 @@ class PandaSimulations:
                 GRIP_FORCE,
                 SETTLE,
                 self.every,
-                lambda one=one: self._update_law(one, still, payload=0.0),
+                functools.partial(self._update_law, i, 0.0, payload=0.0),
             )
         return self.state(ids, self.summed_touch(ids), None)
 
@@ -256,20 +284,10 @@ class PandaSimulations:
         v = np.asarray(velocities, dtype=float)
         twist = np.zeros((len(ids), 6))
         twist[:, :2], twist[:, 2], twist[:, 5] = v[:, :2], v[:, 3], v[:, 2]
+        self.twist[ids] = twist
         before = [self._warnings(i) for i in ids.tolist()]
         self._anchor(ids)
-        timestep = self.arm.model.opt.timestep
-        peak = np.zeros(len(ids))
-        for steps, update, read in update_plan(self.nstep, self.checks, self.every):
-            if update:
-                span = self.every * timestep
-                self.target[ids] += twist[:, :3] * span
-                self.yaw[ids] += twist[:, 5] * span
-                self._update_law(ids, self._bound(ids, twist))
-            for i in ids.tolist():
-                mujoco.mj_step(self.models[i], self.datas[i], nstep=steps)
-            if read:
-                peak = np.maximum(peak, self.summed_touch(ids))
+        peak = self._run(ids.tolist())
         state = self.state(ids, peak, None)
         faults = []
         for k, (count, i) in enumerate(zip(before, ids.tolist(), strict=True)):
@@ -280,6 +298,39 @@ class PandaSimulations:
                 fault = f"the part slipped {slip:.1f} mm from where the hand holds it"
             faults.append(fault)
         return dataclasses.replace(state, errors=tuple(faults))
+
+    def _run(self, ids: list[int]) -> np.ndarray:
+        """Each simulation of ``ids`` through one control step: its peak summed pin force."""
+        threads = min(self.num_threads, len(ids))
+        if threads <= 1:
+            return np.array([self._step_one(i) for i in ids])
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(self.num_threads, thread_name_prefix="panda")
+        shares = np.array_split(np.arange(len(ids)), threads)
+        groups = [[ids[k] for k in share.tolist()] for share in shares]
+        peaks = self._pool.map(lambda group: [self._step_one(i) for i in group], groups)
+        return np.array([peak for group in peaks for peak in group])
+
+    def _step_one(self, i: int) -> float:
+        """Simulation ``i`` through one control step (the law moving its target along its
+        twist): its peak summed pin force."""
+        peak = 0.0
+
+        def read() -> None:
+            nonlocal peak
+            force = self._touch_of(i)
+            if not force <= peak:  # a NaN force is the peak, as with numpy's maximum
+                peak = force
+
+        law = functools.partial(self._update_law, i, self._span)
+        run_plan(self.models[i], self.datas[i], self.plan, law, read)
+        return peak
+
+    def close(self) -> None:
+        """Stop the threads."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
 
     def _warnings(self, i: int) -> int:
         return sum(self.datas[i].warning.number.tolist())
@@ -295,45 +346,51 @@ class PandaSimulations:
             turn = math.remainder(self.yaw[i] - yaw, math.tau)
             self.yaw[i] = yaw + min(max(turn, -self._turn_lag), self._turn_lag)
 
-    def _bound(self, ids: np.ndarray, twist: np.ndarray) -> np.ndarray:
-        """Keep each target in the workspace (:func:`target_range`), as the free body's
-        joint ranges hold its pose: a target moved beyond it is put back on its edge, and
-        the commanded twist along that axis is dropped (``twist`` itself, unchanged, while
-        every target is inside)."""
-        position, yaw = self.target[ids], self.yaw[ids]
-        beyond = np.zeros(twist.shape, dtype=bool)
-        beyond[:, :3] = (position < self._low[:3]) | (position > self._high[:3])
-        beyond[:, 5] = (yaw < self._low[3]) | (yaw > self._high[3])
-        if not beyond.any():
-            return twist
-        self.target[ids] = np.clip(position, self._low[:3], self._high[:3])
-        self.yaw[ids] = np.clip(yaw, self._low[3], self._high[3])
-        return np.where(beyond, 0.0, twist)
+    def _update_law(self, i: int, advance: float, payload: float | None = None) -> None:
+        """Simulation ``i``'s law: its target moved ``advance`` s along its twist and kept
+        in the workspace (:func:`target_range`, as the free body's joint ranges hold its
+        pose: a target beyond it is put back on its edge and the twist along that axis
+        dropped for this update), then its torques (:meth:`~tolins.physics.arm.Arm.apply_law`).
+        ``payload``: the mass (kg) it compensates at the grip site (default: the part's)."""
+        payload = self._held_mass if payload is None else payload
+        if not self.compiled:
+            self._numpy_law(i, advance, payload)
+            return
+        inputs = self._inputs[i]
+        if inputs is None or inputs.data is not self.datas[i]:
+            inputs = self._inputs[i] = LawInputs(self.models[i], self.datas[i])
+        gains = self._law_gains(i, payload)
+        self.arm.apply_law(self.models[i], inputs, self.law_state[i], gains, advance, self._bounds)
 
-    def _update_law(self, ids: np.ndarray, twist: np.ndarray, payload: float | None = None) -> None:
-        """The law's torques for simulations ``ids``, each computed as a batch of one: the
-        stacked numpy pass rounds differently with the batch's size, and a simulation of
-        the vector env must step as the single env's does. ``payload``: the mass (kg) it
-        compensates at the grip site (default: the part's)."""
-        for k, i in enumerate(ids.tolist()):
-            data = self.datas[i]
-            (torques,) = self.arm.batch_torques(
-                [data],
-                self.target[i : i + 1],
-                grip_rotation(self.yaw[i])[None],
-                twist[k : k + 1],
-                self.posture[i : i + 1],
-                payload=self._held_mass if payload is None else payload,
-                gains=self.gains[i],
-            )
-            data.ctrl[self.arm.motors] = torques
+    def _numpy_law(self, i: int, advance: float, payload: float) -> None:
+        """:meth:`_update_law` in numpy (:meth:`~tolins.physics.arm.Arm.batch_torques`)."""
+        state, data = self.law_state[i], self.datas[i]
+        twist = advance_target(state, advance, self._bounds)
+        (data.ctrl[self.arm.motors],) = self.arm.batch_torques(
+            [data],
+            self.target[i : i + 1],
+            grip_rotation(self.yaw[i])[None],
+            twist[None],
+            self.posture[i : i + 1],
+            payload=payload,
+            gains=self.gains[i],
+        )
+
+    def _law_gains(self, i: int, payload: float) -> np.ndarray:
+        """Simulation ``i``'s gains with ``payload`` as the compiled law reads them (kept
+        while its gains stay the same)."""
+        gains, packed = self.gains[i], self._packed_gains[i]
+        entry = packed.get(payload)
+        if entry is None or entry[0] is not gains:
+            entry = packed[payload] = (gains, self.arm.law_gains(gains, payload))
+        return entry[1]
+
+    def _touch_of(self, i: int) -> float:
+        return sum(self.datas[i].sensordata[self._touch].tolist()) * FORCE_SCALE
 
     def summed_touch(self, ids: np.ndarray) -> np.ndarray:
         """Summed normal contact force on the pins of each of ``ids`` now (N)."""
-        return (
-            np.array([sum(self.datas[i].sensordata[self._touch].tolist()) for i in ids.tolist()])
-            * FORCE_SCALE
-        )
+        return np.array([self._touch_of(i) for i in ids.tolist()])
 
     def state(
         self, ids: np.ndarray, peak_force: np.ndarray, errors: tuple[str | None, ...] | None
@@ -375,12 +432,16 @@ class PandaBatch(Capabilities):
             :data:`STIFF_SIDEWAYS_MIN_RATE` in a version stiff sideways).
         gains: The law's gains (default: the version's, :func:`default_gains`).
         contact_checks: Contact-force reads per control step, as the free body's.
+        num_threads: Threads a control step runs the simulations on, at most the
+            machine's cores (:func:`~tolins.physics.mujoco.check_threads`); default: the
+            cores this process may run on. Results do not depend on it.
     """
 
     supports_render = True
     supports_randomization = True
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
+    batch_options = frozenset({"num_threads"})
 
     def __init__(
         self,
@@ -391,8 +452,10 @@ class PandaBatch(Capabilities):
         law_rate: int = LAW_RATE,
         gains: Gains | None = None,
         contact_checks: int | None = None,
+        num_threads: int | None = None,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
+        threads = check_threads(default_threads() if num_threads is None else num_threads)
         self.version = physics_version_of(physics_version)
         build = functools.partial(compile_panda_world, physics_version=physics_version)
         self.model = build(socket)
@@ -401,7 +464,9 @@ class PandaBatch(Capabilities):
         models = [self.model] * self.num_envs
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
         self.arm = Arm(self.model, gains or default_gains(physics_version))
-        self.sims = PandaSimulations(self.arm, models, datas, control_dt, law_rate, contact_checks)
+        self.sims = PandaSimulations(
+            self.arm, models, datas, control_dt, law_rate, contact_checks, threads
+        )
         check_version_rate(physics_version, law_rate)
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
@@ -443,7 +508,8 @@ class PandaBatch(Capabilities):
         return self.sims.models[index], self.sims.datas[index]
 
     def close(self) -> None:
-        """Release the simulations and the compiled models."""
+        """Release the simulations, the compiled models and the threads."""
+        self.sims.close()
         self.sims.datas, self.sims.models = [], []
         self._compiled.clear()
 

@@ -6,9 +6,10 @@ each, report the peak and any fault. It drives :class:`ServoSimulations`, implem
 :class:`ServoStepper` (one ``MjModel``/``MjData`` pair: the single env's
 :class:`~tolins.physics.mujoco.MujocoBackend` and the dm_control physics) and by
 :class:`BatchServo` (many simulations on ``mujoco.batch``, for
-:class:`~tolins.physics.mujoco.MujocoBatch`). This is the one module that calls
-``mj_step`` or builds a ``mujoco.batch.Batch``. The helpers here (wrench, faults, touch
-points) are shared by every MuJoCo stepper.
+:class:`~tolins.physics.mujoco.MujocoBatch`). :func:`run_plan` steps a simulation whose
+control law runs between chunks of physics steps (the Panda, :mod:`tolins.physics.panda`).
+This is the one module that calls ``mj_step`` or builds a ``mujoco.batch.Batch``. The
+helpers here (wrench, faults, touch points) are shared by every MuJoCo stepper.
 """
 
 from __future__ import annotations
@@ -87,6 +88,25 @@ def run_segments(
                 steps -= quiet
             if steps:
                 step(steps)
+
+
+def run_plan(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    plan: Iterable[tuple[int, bool, bool]],
+    update: Callable[[], None],
+    read: Callable[[], None],
+) -> None:
+    """Step one simulation through ``plan``, segments ``(steps, update, read)`` of physics
+    steps: ``update()`` (a control law writing ``data.ctrl``) before each segment marked
+    so, ``read()`` after each segment marked so (the Panda's control step and its
+    fingers' closing)."""
+    for steps, law, reads in plan:
+        if law:
+            update()
+        mujoco.mj_step(model, data, nstep=steps)
+        if reads:
+            read()
 
 
 def chunk_segments(n: int, window: int, factor: int) -> tuple[list[tuple[int, int]], int]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import re
 from pathlib import Path
 
@@ -53,3 +54,27 @@ def test_every_module_is_named_in_the_bullet_of_its_folder(module: Path) -> None
     assert any(_names(part, module) for part in holders), (
         f"docs/architecture.md's bullet for {folder} does not name {module.as_posix()}"
     )
+
+
+def _steps_mujoco(tree: ast.AST) -> bool:
+    """Whether a module calls ``mj_step`` (or ``mj_step1``/``2``), MuJoCo's rollout, or
+    builds a ``mujoco.batch.Batch``."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in {"mj_step", "mj_step1", "mj_step2"}:
+            return True
+        if isinstance(node, ast.Attribute) and node.attr == "Batch":
+            return True
+        if isinstance(node, ast.alias) and node.name in {"mj_step", "rollout", "Batch"}:
+            return True
+    return False
+
+
+def test_servo_is_the_one_module_that_steps_mujoco() -> None:
+    """docs/architecture.md says so: every simulator's physics goes through servo.py."""
+    stepping = [
+        module.as_posix()
+        for module in _modules()
+        if _steps_mujoco(ast.parse((PACKAGE / module).read_text()))
+    ]
+    assert stepping == ["physics/servo.py"]
+    assert "the one module that calls `mj_step`" in " ".join(DOC.split())

@@ -27,7 +27,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-import tolins  # noqa: F401  (registers the ids)
+import tolins
 from tolins.policies import EXPERTS
 
 

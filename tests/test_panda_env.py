@@ -138,6 +138,7 @@ def test_a_grasp_error_is_drawn_per_episode_off_by_default_and_ground_truth_in_i
     [
         ({"robot": "ur5"}, "robot='ur5'; allowed: 'free', 'panda'"),
         ({"robot": "panda", "backend": "kinematic"}, "backend='kinematic' with robot='panda'"),
+        ({"robot": "panda", "backend": "warp"}, "Warp's kernels cannot call it"),
         ({"grasp_error": 0.1}, "grasp_error needs a robot"),
         ({"robot": "panda", "grasp_error": [2.0, 0, 0]}, "grasp_error=.* is out of range"),
         (

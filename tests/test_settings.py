@@ -2,13 +2,15 @@
 
 Covers "every accepted setting works" (control_dt on MuJoCo, success_depth,
 defect_sigma, non-numbers in distributions, noise and actions, a property-based test over
-``gym.make`` keywords, sockets, reset options and actions), bit-identical copies of a
-MuJoCo env, and renderers closed at exit.
+``gym.make`` keywords, sockets, reset options and actions), one signature for every API
+(each field of ``TaskSettings`` taken by the gym env, the vector env and dm_control with
+the same default), bit-identical copies of a MuJoCo env, and renderers closed at exit.
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import os
 import pickle
@@ -22,10 +24,13 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
+import tolins
 from tolins import dmc
 from tolins.envs.initial_pose import InitialPoseDistribution
-from tolins.envs.task_settings import MAX_NOISE_STD, TaskSettings
+from tolins.envs.insertion_env import ENV_KEYWORDS, InsertionEnv
+from tolins.envs.task_settings import MAX_NOISE_STD, TASK_KEYWORDS, TaskSettings
 from tolins.envs.tasks import DEFECT_SIGMA
+from tolins.envs.vector import VECTOR_KEYWORDS, InsertionVectorEnv
 from tolins.geometry.defects import (
     MIN_VALID_SHARE,
     max_defect_sigma,
@@ -35,6 +40,7 @@ from tolins.geometry.defects import (
 from tolins.geometry.specs import CircularSocket, PolygonSocket
 from tolins.paper import A_MAX
 from tolins.physics.mujoco import MujocoBackend
+from tolins.physics.versions import VERSIONS, physics_version
 
 DOWN = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
 GENERIC = "tolins/Insert-v1"
@@ -189,6 +195,93 @@ def test_a_defect_sigma_with_fewer_than_half_valid_draws_is_refused(socket) -> N
     TaskSettings(socket, defect_sigma=largest)
     with pytest.raises(ValueError, match=r"defect_sigma=.*allowed: 0 < defect_sigma ≤ "):
         TaskSettings(socket, defect_sigma=largest * 1.01)
+
+
+# --- one signature: TaskSettings -------------------------------------------------------
+
+#: Every keyword of ``TaskSettings`` (its socket and its settings).
+SETTING_FIELDS = tuple(f.name for f in dataclasses.fields(TaskSettings) if f.init)
+
+
+def _same_settings(a: TaskSettings, b: TaskSettings) -> list[str]:
+    """The fields (every one, the resolved ``version`` too) on which ``a`` and ``b`` differ."""
+    differ = []
+    for f in dataclasses.fields(TaskSettings):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        same = np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y
+        if not same or type(x) is not type(y):
+            differ.append(f.name)
+    return differ
+
+
+def _settings_of_every_api(socket, **keywords) -> dict[str, TaskSettings]:
+    """The settings each API builds of ``socket`` and the settings' ``keywords``."""
+    control_dt = keywords.get("control_dt", TaskSettings(socket).control_dt)
+    task_kwargs = {k: v for k, v in keywords.items() if k != "control_dt"}
+    loaded = dmc.load(
+        "circle2x2",
+        "insert",
+        task_kwargs=task_kwargs,
+        environment_kwargs={"control_timestep": control_dt},
+    )
+    single = {"backend": "kinematic", **keywords}
+    return {
+        "InsertionEnv": InsertionEnv(socket, **single).settings,
+        "gym.make": gym.make(GENERIC, socket=socket, **single).unwrapped.settings,
+        "InsertionVectorEnv": InsertionVectorEnv(2, socket, **single).settings,
+        "tolins.make_vec": tolins.make_vec(GENERIC, 2, socket=socket, **single).settings,
+        "dmc.Insert": dmc.Insert(socket, **keywords).settings,
+        "dmc.load": loaded.task.settings,
+    }
+
+
+def test_every_api_takes_every_setting_with_the_same_default() -> None:
+    """A new field of ``TaskSettings`` reaches every API: built with no setting, each API's
+    settings are ``TaskSettings(socket)``'s; handed every setting at once (its default, as
+    the settings hold it), each takes them all and holds the same."""
+    socket = CircularSocket(2, 2)  # dmc.load's circle2x2
+    expected = TaskSettings(socket)
+    for api, built in _settings_of_every_api(socket).items():
+        assert not _same_settings(built, expected), (
+            f"{api}: default of {_same_settings(built, expected)}"
+        )
+    every = {name: getattr(expected, name) for name in SETTING_FIELDS if name != "socket"}
+    assert set(every) == set(TASK_KEYWORDS)
+    for api, built in _settings_of_every_api(socket, **every).items():
+        assert not _same_settings(built, expected), f"{api}: {_same_settings(built, expected)}"
+
+
+def test_every_setting_is_a_listed_keyword_and_documented_once() -> None:
+    """The keyword lists (and the errors naming them) come from the settings' fields, and
+    each field has its line in ``TaskSettings``' docstring."""
+    for keywords in (ENV_KEYWORDS, VECTOR_KEYWORDS, (*dmc.TASK_KWARGS, "socket", "control_dt")):
+        assert set(SETTING_FIELDS) <= set(keywords)
+        assert len(set(keywords)) == len(keywords)
+    attributes = TaskSettings.__doc__.split("Attributes:")[1]
+    undocumented = [name for name in SETTING_FIELDS if f"\n        {name}: " not in attributes]
+    assert not undocumented, f"TaskSettings' docstring lacks {undocumented}"
+
+
+@pytest.mark.parametrize(
+    "make", [InsertionEnv, dmc.Insert, lambda s, **k: InsertionVectorEnv(2, s, **k)]
+)
+def test_an_unknown_setting_is_refused_naming_the_allowed_ones(make) -> None:
+    with pytest.raises(ValueError, match=r"unknown keyword 'horizn'; allowed: .*horizon"):
+        make(CircularSocket(2, 2), horizn=10)
+
+
+def test_the_physics_version_is_resolved_once_and_handed_down() -> None:
+    """The settings hold the version's number and its ``PhysicsVersion``, which the single
+    env's and the vector env's simulators and dm_control's physics get as they are."""
+    assert physics_version(VERSIONS[2]) is VERSIONS[2]
+    settings_ = TaskSettings(CircularSocket(2, 2), physics_version=VERSIONS[2])
+    assert settings_.physics_version == 2 and settings_.version is VERSIONS[2]
+    env = InsertionEnv(CircularSocket(2, 2), physics_version=2)
+    assert env.physics_version == 2 and env.backend.version is env.settings.version
+    vector = InsertionVectorEnv(2, CircularSocket(2, 2), physics_version=2, num_threads=1)
+    assert vector.physics.version is vector.settings.version is VERSIONS[2]
+    loaded = dmc.load("circle2x2", "insert", task_kwargs={"physics_version": 2})
+    assert loaded.physics.version is loaded.task.settings.version is VERSIONS[2]
 
 
 # --- non-numbers, NaN, inf, huge values -------------------------------------------------

@@ -73,10 +73,11 @@ class InsertionPhysics(dm_mujoco.Physics):
 
     @classmethod
     def from_spec(
-        cls, spec: SocketSpec, physics_version: int = 1, robot: str = "free"
+        cls, spec: SocketSpec, physics_version: int | PhysicsVersion = 1, robot: str = "free"
     ) -> InsertionPhysics:
-        """The physics of ``spec``'s board and workpiece in a physics version, ``robot``
-        holding the part (``"panda"``: a :class:`PandaInsertionPhysics`)."""
+        """The physics of ``spec``'s board and workpiece in a physics version (its number, or
+        the :class:`PhysicsVersion` the task's settings resolved), ``robot`` holding the part
+        (``"panda"``: a :class:`PandaInsertionPhysics`)."""
         if check_robot(robot) != cls.robot:
             return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot)
         version = physics_version_of(physics_version)
@@ -90,7 +91,7 @@ class InsertionPhysics(dm_mujoco.Physics):
     @classmethod
     def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
         """The model of ``spec`` in ``version``."""
-        return dm_mujoco.wrapper.MjModel(compile_model(spec, version.number))
+        return dm_mujoco.wrapper.MjModel(compile_model(spec, version))
 
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
@@ -136,13 +137,13 @@ class PandaInsertionPhysics(InsertionPhysics):
     version: PhysicsVersion = VERSIONS[2]
 
     def _bind_stepper(self) -> None:
-        gains = default_gains(self.version.number)
+        gains = default_gains(self.version)
         self.stepper = PandaStepper(self.model.ptr, self.data.ptr, CONTROL_DT, gains)
         self._bound()
 
     @classmethod
     def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
-        return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version.number))
+        return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version))
 
     def set_grasp(self, offset: np.ndarray) -> None:
         self.stepper.set_grasp(offset)

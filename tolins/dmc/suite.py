@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 from typing import Any
 
 from dm_control.rl import control
@@ -10,6 +9,7 @@ from dm_control.utils import containers
 
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
+from tolins.envs.task_settings import keywords_of
 from tolins.envs.tasks import PRESETS, ROBOT_TASKS, Task
 from tolins.paper import CONTROL_DT
 
@@ -17,10 +17,9 @@ TASK_NAME = "insert"
 #: Keywords of :class:`Insert` that the suite sets itself: the domain's socket, and the
 #: control period, which is ``environment_kwargs["control_timestep"]`` (dm_control's name).
 _SET_BY_THE_SUITE = ("socket", "control_dt")
-#: Keywords ``task_kwargs`` may hold: those of :class:`Insert` but the ones the suite sets.
-TASK_KWARGS = tuple(
-    name for name in inspect.signature(Insert).parameters if name not in _SET_BY_THE_SUITE
-)
+#: Keywords ``task_kwargs`` may hold: those of :class:`Insert` (its own, then the task's
+#: settings) but the ones the suite sets.
+TASK_KWARGS = tuple(name for name in keywords_of(Insert) if name not in _SET_BY_THE_SUITE)
 
 
 def make_environment(
@@ -44,7 +43,7 @@ def make_environment(
     insert = Insert(task.socket, control_dt=environment_kwargs["control_timestep"], **task_kwargs)
     environment_kwargs["control_timestep"] = insert.settings.control_dt
     settings = insert.settings
-    physics = InsertionPhysics.from_spec(task.socket, settings.physics_version, settings.robot)
+    physics = InsertionPhysics.from_spec(task.socket, settings.version, settings.robot)
     return control.Environment(physics, insert, **environment_kwargs)
 
 

@@ -12,11 +12,10 @@ from dm_env import specs
 from tolins.dmc.physics import InsertionPhysics
 from tolins.envs.actions import check_action
 from tolins.envs.episode_state import EpisodeState, check_fixed_pose
-from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.scoring import NO_SCORE, EpisodeScore
 from tolins.envs.task_settings import TaskSettings
 from tolins.geometry.specs import SocketSpec
-from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.paper import A_MAX
 from tolins.physics.randomization import PhysicsDraw
 
 #: Observation names and sizes, in the order of the gym env's 8-vector.
@@ -40,6 +39,14 @@ def _generator(random: Any) -> np.random.Generator:
 
 class Insert(control.Task):
     """Insert a workpiece's pins into a socket's holes: the gym env's task for dm_control.
+
+    ``Insert(socket, *, goal=(0, 0, 0), pose=None, random=None, **settings)``: ``socket``
+    and ``goal`` as the gym env's, ``pose`` a fixed initial pose ``[x, y, theta, z]`` (or
+    ``None``: drawn each episode), ``random`` the episodes' randomness (below). Every other
+    keyword is a setting of the task, an attribute of
+    :class:`~tolins.envs.task_settings.TaskSettings` (its docstring gives each one's meaning
+    and default), the same as the gym env's; any other keyword raises ``ValueError``
+    naming it and the allowed ones.
 
     **Observation** (ordered dict of float64 arrays, the gym env's 8-vector split up):
     ``pose_error`` ``[x̂−x*, ŷ−y*, θ̂−θ*]`` (mm, rad), ``height`` ``[ẑ]`` (mm, pin tips
@@ -99,41 +106,12 @@ class Insert(control.Task):
         self,
         socket: SocketSpec,
         *,
-        defect_sigma: float | None = None,
-        measurement_noise: Any = POSE_NOISE_STD,
-        force_noise: Any = 0.0,
         goal: Any = (0.0, 0.0, 0.0),
         pose: Any = None,
-        initial_pose: InitialPoseDistribution | None = None,
-        horizon: int = HORIZON,
-        success_depth: float = 1.0,
-        collision_force: float = 0.5,
-        reward_mode: str = "sparse",
-        randomization: Any = None,
-        defects: Any = None,
-        control_dt: float = CONTROL_DT,
-        physics_version: int = 1,
-        robot: str = "free",
-        grasp_error: Any = None,
         random: Any = None,
+        **settings: Any,
     ) -> None:
-        self.settings = TaskSettings(
-            socket,
-            measurement_noise=measurement_noise,
-            force_noise=force_noise,
-            horizon=horizon,
-            success_depth=success_depth,
-            collision_force=collision_force,
-            defect_sigma=defect_sigma,
-            initial_pose=initial_pose,
-            control_dt=control_dt,
-            reward_mode=reward_mode,
-            randomization=randomization,
-            defects=defects,
-            physics_version=physics_version,
-            robot=robot,
-            grasp_error=grasp_error,
-        )
+        self.settings = TaskSettings.build(Insert, socket, settings)
         self.episode = EpisodeState(self.settings, goal)
         self.pose = check_fixed_pose(self.settings, pose)
         self.random = _generator(random)

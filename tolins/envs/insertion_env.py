@@ -9,23 +9,19 @@ import numpy as np
 
 from tolins.envs.actions import check_action
 from tolins.envs.episode_state import EpisodeState
-from tolins.envs.initial_pose import InitialPoseDistribution
 from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
 from tolins.envs.task_settings import (
-    TASK_KEYWORDS,
     SettingsAttributes,
     TaskSettings,
     check_capabilities,
-    check_keywords,
+    keywords_of,
 )
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import is_seed
-from tolins.paper import A_MAX, CONTROL_DT, HORIZON, POSE_NOISE_STD
+from tolins.paper import A_MAX
 from tolins.physics import BACKENDS, Backend, make_backend, simulator
 
 __all__ = ["BACKENDS", "ENV_KEYWORDS", "InsertionEnv"]
-#: Every keyword ``InsertionEnv`` takes.
-ENV_KEYWORDS = ("socket", "backend", "goal", "render_mode", *TASK_KEYWORDS)
 
 
 def check_reset_seed(seed: object) -> int | None:
@@ -41,6 +37,18 @@ def check_reset_seed(seed: object) -> int | None:
 
 class InsertionEnv(gym.Env, SettingsAttributes):
     """Insert a workpiece's pins into a socket's holes (the paper's task).
+
+    ``InsertionEnv(socket, *, backend="mujoco", goal=(0, 0, 0), render_mode=None,
+    **settings)``: ``socket`` the nominal :class:`~tolins.geometry.specs.CircularSocket` or
+    :class:`~tolins.geometry.specs.PolygonSocket`; ``backend`` the simulator (``"mujoco"``
+    or ``"kinematic"``, :data:`~tolins.physics.registry.BACKENDS`); ``goal`` ``[x*, y*,
+    θ*]``; ``render_mode`` ``None`` or ``"rgb_array"``. Every other keyword is a setting of
+    the task, an attribute of :class:`~tolins.envs.task_settings.TaskSettings` (whose
+    docstring gives each one's meaning and default: ``measurement_noise``, ``horizon``,
+    ``control_dt``, ``reward_mode``, ``physics_version``, ``robot``, …), validated there
+    once and readable as an attribute of the env (``env.horizon``; all at once:
+    ``env.settings``); :data:`ENV_KEYWORDS` lists every keyword. The sections below say
+    what they do in the episode.
 
     **Task.** A workpiece with one or more pins starts above a board and must be
     moved by velocity commands until its pins are inside their holes. It moves in
@@ -231,52 +239,21 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         socket: SocketSpec,
         *,
         backend: str = "mujoco",
-        measurement_noise: Any = POSE_NOISE_STD,
-        force_noise: Any = 0.0,
         goal: Any = (0.0, 0.0, 0.0),
-        horizon: int = HORIZON,
-        control_dt: float = CONTROL_DT,
-        success_depth: float = 1.0,
-        collision_force: float = 0.5,
-        defect_sigma: float | None = None,
-        initial_pose: InitialPoseDistribution | None = None,
-        reward_mode: str = "sparse",
-        randomization: Any = None,
         render_mode: str | None = None,
-        defects: Any = None,
-        physics_version: int = 1,
-        robot: str = "free",
-        grasp_error: Any = None,
-        **unknown: Any,
+        **settings: Any,
     ) -> None:
-        check_keywords("InsertionEnv", unknown, ENV_KEYWORDS)
-        simulator(backend, single=True, robot=robot)
+        self.settings = TaskSettings.build(InsertionEnv, socket, settings)
+        simulator(backend, single=True, robot=self.settings.robot)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r}; allowed: None, 'rgb_array'")
-        self.settings = TaskSettings(
-            socket,
-            measurement_noise=measurement_noise,
-            force_noise=force_noise,
-            horizon=horizon,
-            success_depth=success_depth,
-            collision_force=collision_force,
-            defect_sigma=defect_sigma,
-            initial_pose=initial_pose,
-            reward_mode=reward_mode,
-            control_dt=control_dt,
-            randomization=randomization,
-            defects=defects,
-            physics_version=physics_version,
-            robot=robot,
-            grasp_error=grasp_error,
-        )
         check_capabilities(self.settings, backend, single=True)
         self.backend_name = backend
         self.render_mode = render_mode
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
         self.backend: Backend | None = make_backend(
-            backend, socket, self.control_dt, self.physics_version, self.settings.robot
+            backend, socket, self.control_dt, self.settings.version, self.settings.robot
         )
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
@@ -354,3 +331,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         if self._renderer is not None:
             close_renderer(self._renderer)
             self._renderer = None
+
+
+#: Every keyword ``InsertionEnv`` takes: its own, then the settings'.
+ENV_KEYWORDS = keywords_of(InsertionEnv)

@@ -1,15 +1,19 @@
 """The settings of one insertion task, validated once, and the per-episode draws they define.
 
 :class:`TaskSettings` holds what every API of the task shares (noise, horizon, success and
-collision thresholds, control period, reward mode, defect and physics randomisation) and
-draws an episode's workpiece and physics, judges success and measures an observation.
-The gym env, the vector env and the dm_control task all build one and hand it to their
-:class:`~tolins.envs.episode_state.EpisodeState`.
+collision thresholds, control period, reward mode, defect and physics randomisation, the
+physics version and the robot) and draws an episode's workpiece and physics, judges success
+and measures an observation. It is the one place a setting is written: its field (default
+and docstring) and its check in ``__post_init__``. The gym env, the vector env and the
+dm_control task take every setting as a keyword they hand on to :meth:`TaskSettings.build`
+unread, and give the settings to their :class:`~tolins.envs.episode_state.EpisodeState`;
+their simulators get the :class:`~tolins.physics.versions.PhysicsVersion` resolved here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import inspect
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -27,7 +31,7 @@ from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
 from tolins.physics.registry import check_robot, simulator, taking_defect
 from tolins.physics.schedule import check_control_dt
-from tolins.physics.versions import check_version_robot, physics_version
+from tolins.physics.versions import PhysicsVersion, check_version_robot, physics_version
 
 #: Largest std of the grasp error ``[x, y, yaw]`` (mm, mm, rad): beyond it the part could
 #: leave the fingers' pads.
@@ -39,7 +43,11 @@ MAX_NOISE_STD = 1e3
 
 @dataclass(frozen=True, eq=False)
 class TaskSettings:
-    """Validated settings of one insertion task (see ``InsertionEnv`` for their meaning).
+    """Validated settings of one insertion task: every keyword of the gym env, the vector env
+    and the dm_control task besides the env's own (``backend``, ``goal``, ``render_mode``, …).
+
+    Build one from an env's keywords with :meth:`build`. A new setting is a field here, with
+    its default and a line below, and its check in ``__post_init__``; every API takes it.
 
     Attributes:
         socket: The nominal socket.
@@ -64,7 +72,8 @@ class TaskSettings:
             0.05)``, ``("blocked", None)``), after any bent pins of ``defect_sigma``; or
             ``None``.
         physics_version: The MuJoCo physics, 1 or 2, or 3 with ``robot="panda"``
-            (:mod:`tolins.physics.versions`; the ``-v1``, ``-v2`` and ``-v3`` ids).
+            (:mod:`tolins.physics.versions`; the ``-v1``, ``-v2`` and ``-v3`` ids); a
+            :class:`~tolins.physics.versions.PhysicsVersion` is taken too. Kept as its number.
         robot: What holds the workpiece (:data:`~tolins.physics.registry.ROBOTS`):
             ``"free"``, the paper's ideal servos on a free-floating body, or ``"panda"``, a
             Franka Panda (:mod:`tolins.physics.panda`).
@@ -78,6 +87,8 @@ class TaskSettings:
             an offset along the pads that is not the draw's: the part's true offset is
             ``info["pose"] - info["sensed_pose"]``. A robot's only; three stds (a single
             number is refused), each at most :data:`MAX_GRASP_ERROR_STD`.
+        version: Not a keyword: the :class:`~tolins.physics.versions.PhysicsVersion` of
+            ``physics_version``, looked up once here; what the envs hand their simulators.
     """
 
     socket: SocketSpec
@@ -95,6 +106,17 @@ class TaskSettings:
     physics_version: int = 1
     robot: str = "free"
     grasp_error: Any = None
+    version: PhysicsVersion = field(init=False, repr=False)
+
+    @classmethod
+    def build(
+        cls, owner: Callable[..., Any], socket: SocketSpec, keywords: dict[str, Any]
+    ) -> TaskSettings:
+        """The settings of ``socket`` and ``keywords``, the keywords that ``owner`` (an env
+        class) took besides its own parameters; ``ValueError`` naming any that is neither a
+        setting nor ``owner``'s parameter, with the allowed ones (:func:`keywords_of`)."""
+        check_keywords(owner.__name__, keywords, keywords_of(owner))
+        return cls(socket, **keywords)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -128,12 +150,12 @@ class TaskSettings:
         set_(self, "control_dt", check_control_dt(self.control_dt))
         set_(self, "reward_mode", check_reward_mode(self.reward_mode))
         set_(self, "randomization", PhysicsRandomization.of(self.randomization))
-        version = physics_version(self.physics_version)
-        set_(self, "physics_version", version.number)
+        set_(self, "version", physics_version(self.physics_version))
+        set_(self, "physics_version", self.version.number)
         set_(self, "robot", check_robot(self.robot))
-        check_version_robot(version, self.robot)
+        check_version_robot(self.version, self.robot)
         if self.robot == "panda" and self.randomization is not None:
-            check_gain_range(self.physics_version, self.randomization.servo_gain)
+            check_gain_range(self.version, self.randomization.servo_gain)
         set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
@@ -224,35 +246,41 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
         )
 
 
+#: The keywords of :class:`TaskSettings` an env takes besides its socket.
+TASK_KEYWORDS = tuple(f.name for f in fields(TaskSettings) if f.init and f.name != "socket")
+
+
+def keywords_of(owner: Callable[..., Any]) -> tuple[str, ...]:
+    """Every keyword ``owner`` (an env class, or a function) takes: its named parameters
+    (not ``self``, ``*args`` or ``**kwargs``), then the settings' :data:`TASK_KEYWORDS`
+    (which its ``**kwargs`` hands to :meth:`TaskSettings.build`)."""
+    variadic = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
+    parameters = inspect.signature(owner).parameters.values()
+    own = tuple(p.name for p in parameters if p.kind not in variadic and p.name != "self")
+    return (*own, *(name for name in TASK_KEYWORDS if name not in own))
+
+
 def setting(name: str) -> property:
     """A read-only attribute: ``TaskSettings.<name>`` of its owner's ``settings``."""
     return property(lambda self: getattr(self.settings, name), doc=f"See ``TaskSettings.{name}``.")
 
 
+def _with_every_setting(cls: type) -> type:
+    """``cls`` with a read-only attribute per keyword of :data:`TASK_KEYWORDS`."""
+    for name in TASK_KEYWORDS:
+        setattr(cls, name, setting(name))
+    return cls
+
+
+@_with_every_setting
 class SettingsAttributes:
     """The task's settings as read-only attributes of an owner that has ``settings`` (a
-    :class:`TaskSettings`): what the gym env and each env of the vector env answer alike.
-    ``nominal_socket`` is the settings' socket, before any episode's defects."""
+    :class:`TaskSettings`): what the gym env and each env of the vector env answer alike,
+    one per keyword of :data:`TASK_KEYWORDS` (``horizon``, ``physics_version``, …), each
+    ``TaskSettings``' attribute of that name. ``nominal_socket`` is the settings' socket,
+    before any episode's defects."""
 
     nominal_socket = setting("socket")
-    measurement_noise = setting("measurement_noise")
-    force_noise = setting("force_noise")
-    horizon = setting("horizon")
-    success_depth = setting("success_depth")
-    collision_force = setting("collision_force")
-    defect_sigma = setting("defect_sigma")
-    initial_pose = setting("initial_pose")
-    reward_mode = setting("reward_mode")
-    randomization = setting("randomization")
-    defects = setting("defects")
-    control_dt = setting("control_dt")
-    physics_version = setting("physics_version")
-    robot = setting("robot")
-    grasp_error = setting("grasp_error")
-
-
-#: The keywords of :class:`TaskSettings` an env takes besides its socket.
-TASK_KEYWORDS = tuple(f.name for f in fields(TaskSettings) if f.init and f.name != "socket")
 
 
 def check_keywords(owner: str, given: dict[str, Any], allowed: Iterable[str]) -> None:

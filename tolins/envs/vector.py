@@ -26,12 +26,7 @@ from gymnasium.vector.utils import batch_space
 from tolins.envs.actions import check_action
 from tolins.envs.episode_state import RESET_OPTIONS, EpisodeState
 from tolins.envs.rendering import FRAME_SIZE, close_renderer, draw_frame, open_renderer
-from tolins.envs.task_settings import (
-    TASK_KEYWORDS,
-    TaskSettings,
-    check_capabilities,
-    check_keywords,
-)
+from tolins.envs.task_settings import TaskSettings, check_capabilities, keywords_of
 from tolins.envs.vector_views import EnvView, check_name, check_value
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int, is_seed
@@ -40,18 +35,6 @@ from tolins.physics import BatchPhysics, make_batch
 from tolins.physics.registry import with_capability
 
 _AUTORESET = {mode.value: mode for mode in AutoresetMode}
-#: Every keyword ``InsertionVectorEnv`` takes.
-VECTOR_KEYWORDS = (
-    "num_envs",
-    "socket",
-    "backend",
-    "num_threads",
-    "device",
-    "autoreset_mode",
-    "goal",
-    "render_mode",
-    *TASK_KEYWORDS,
-)
 #: The backends whose simulations can be drawn (``render_mode="rgb_array"``).
 DRAWABLE_BACKENDS = with_capability("supports_render")
 
@@ -152,11 +135,11 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         goal: The goal of every env, as ``InsertionEnv``'s.
         render_mode: ``None`` or ``"rgb_array"`` (``render()``: one frame per env, each the
             single env's frame of the same state; not on ``backend="warp"``).
-        **task: Every other keyword of ``InsertionEnv`` (``measurement_noise``,
-            ``force_noise``, ``horizon``, ``control_dt``, ``success_depth``,
-            ``collision_force``, ``defect_sigma``, ``initial_pose``, ``reward_mode``,
-            ``randomization``, ``defects``); any other keyword raises ``ValueError`` naming
-            it and the allowed ones.
+        **settings: The task's settings, as ``InsertionEnv`` takes them: every attribute
+            of :class:`~tolins.envs.task_settings.TaskSettings` (its docstring gives their
+            meaning and defaults: ``measurement_noise``, ``horizon``, ``reward_mode``,
+            ``physics_version``, …), validated there once; any other keyword raises
+            ``ValueError`` naming it and the allowed ones (:data:`VECTOR_KEYWORDS`).
 
     ``info`` holds every key of the single env's, batched, with gymnasium's ``_key``
     masks. ``reset(seed=s)`` seeds env ``i`` with ``s + i``; ``reset(seed=[s0, s1, ...])``
@@ -197,17 +180,16 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         goal: Any = (0.0, 0.0, 0.0),
         render_mode: str | None = None,
-        **task: Any,
+        **settings: Any,
     ) -> None:
-        check_keywords("InsertionVectorEnv", task, VECTOR_KEYWORDS)
         if socket is None:
             raise ValueError("socket is required; allowed: a CircularSocket or PolygonSocket")
+        self.settings = TaskSettings.build(InsertionVectorEnv, socket, settings)
         _check_render_mode(render_mode, backend)
         mode = getattr(autoreset_mode, "value", autoreset_mode)
         if mode not in _AUTORESET:
             raise ValueError(f"autoreset_mode={autoreset_mode!r}; allowed: {sorted(_AUTORESET)}")
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
-        self.settings = TaskSettings(socket, **task)
         self.backend_name = backend
         self.metadata = {**self.metadata, "autoreset_mode": _AUTORESET[mode]}
         self.render_mode = render_mode
@@ -217,7 +199,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             socket,
             self.num_envs,
             self.settings.control_dt,
-            physics_version=self.settings.physics_version,
+            physics_version=self.settings.version,
             num_threads=num_threads,
             device=device,
             persistent=render_mode is not None,
@@ -417,6 +399,10 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
         self._renderers = {}
         physics, self.physics = self.physics, None
         physics.close()
+
+
+#: Every keyword ``InsertionVectorEnv`` takes: its own, then the settings'.
+VECTOR_KEYWORDS = keywords_of(InsertionVectorEnv)
 
 
 def _check_render_mode(render_mode: object, backend: str) -> None:

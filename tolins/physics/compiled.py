@@ -17,23 +17,23 @@ import mujoco
 
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
+from tolins.physics.versions import PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
 
 T = TypeVar("T")
 
 
-def compile_model(socket: SocketSpec, physics_version: int = 1) -> mujoco.MjModel:
+def compile_model(socket: SocketSpec, physics_version: int | PhysicsVersion = 1) -> mujoco.MjModel:
     """The MuJoCo model of ``socket``'s board and workpiece (:func:`tolins.make_mjcf`) for a
-    physics version (:mod:`tolins.physics.versions`)."""
+    physics version (:mod:`tolins.physics.versions`: its number or the version itself)."""
     version = physics_version_of(physics_version)
     return mujoco.MjModel.from_xml_string(make_mjcf(socket, board_body=not version.board_in_world))
 
 
-def model_builder(physics_version: int) -> Callable[[SocketSpec], mujoco.MjModel]:
-    """:func:`compile_model` of one physics version, as a picklable one-argument function
-    (for a :class:`SocketCache`)."""
-    physics_version_of(physics_version)
-    return functools.partial(compile_model, physics_version=physics_version)
+def model_builder(physics_version: int | PhysicsVersion) -> Callable[[SocketSpec], mujoco.MjModel]:
+    """:func:`compile_model` of one physics version, looked up here once, as a picklable
+    one-argument function (for a :class:`SocketCache`)."""
+    return functools.partial(compile_model, physics_version=physics_version_of(physics_version))
 
 
 class SocketCache(Generic[T]):

@@ -60,6 +60,7 @@ from tolins.mjcf import model_layout
 from tolins.physics.compiled import SocketCache, compile_model
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.schedule import check_control_dt
+from tolins.physics.versions import PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
 
 #: The binary contact force (N) and torque (N·mm) of a colliding workpiece.
@@ -222,7 +223,11 @@ class KinematicBatch(Capabilities):
     defect_kinds = frozenset(DEFECT_KINDS)
 
     def __init__(
-        self, socket: SocketSpec, num_envs: int, control_dt: float, physics_version: int = 1
+        self,
+        socket: SocketSpec,
+        num_envs: int,
+        control_dt: float,
+        physics_version: int | PhysicsVersion = 1,
     ) -> None:
         physics_version_of(physics_version)  # the same simulator in every version
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
@@ -307,7 +312,9 @@ class KinematicBackend(Capabilities):
     supports_touch_points = False
     defect_kinds = frozenset(DEFECT_KINDS)
 
-    def __init__(self, spec: SocketSpec, control_dt: float, physics_version: int = 1) -> None:
+    def __init__(
+        self, spec: SocketSpec, control_dt: float, physics_version: int | PhysicsVersion = 1
+    ) -> None:
         self.spec = spec
         self._batch = KinematicBatch(spec, 1, control_dt, physics_version)
 

@@ -36,6 +36,7 @@ from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import control_plan
 from tolins.physics.servo import BatchServo, ServoStepper, pin_touch_points
+from tolins.physics.versions import PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
 
 
@@ -53,7 +54,8 @@ class MujocoBackend(Capabilities):
             ``peak_force`` (chunks as in :class:`ServoStepper`), 1 … the physics steps;
             default :func:`~tolins.physics.schedule.default_contact_checks` of the physics
             steps.
-        physics_version: 1 or 2 (:mod:`tolins.physics.versions`).
+        physics_version: 1 or 2, or that :class:`~tolins.physics.versions.PhysicsVersion`
+            (:mod:`tolins.physics.versions`).
     """
 
     supports_render = True
@@ -66,14 +68,14 @@ class MujocoBackend(Capabilities):
         spec: SocketSpec,
         control_dt: float,
         contact_checks: int | None = None,
-        physics_version: int = 1,
+        physics_version: int | PhysicsVersion = 1,
     ) -> None:
         self.control_dt = control_dt
         self.version = physics_version_of(physics_version)
         self._contact_checks = contact_checks  # as asked: None for the default
         # The nominal model and the workpiece's now; a model is left here at its nominal
         # physics, so a workpiece that comes back starts from its compiled values.
-        self._compiled = SocketCache(model_builder(physics_version), spec, size=1)
+        self._compiled = SocketCache(model_builder(self.version), spec, size=1)
         self._load(spec)
 
     def _load(self, spec: SocketSpec) -> None:
@@ -159,7 +161,8 @@ class MujocoBatch(Capabilities):
         persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``), so
             that :meth:`pin_touch_points` can read a simulation's contacts and
             :meth:`drawing` its whole data.
-        physics_version: 1 or 2 (:mod:`tolins.physics.versions`), as the single env's.
+        physics_version: 1 or 2, or that ``PhysicsVersion`` (:mod:`tolins.physics.versions`),
+            as the single env's.
     """
 
     supports_render = True
@@ -176,14 +179,14 @@ class MujocoBatch(Capabilities):
         num_threads: int | None = None,
         contact_checks: int | None = None,
         persistent: bool = False,
-        physics_version: int = 1,
+        physics_version: int | PhysicsVersion = 1,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = default_threads() if num_threads is None else num_threads
         self.num_threads = check_threads(threads)
         self.version = physics_version_of(physics_version)
         self.socket = socket
-        build = model_builder(physics_version)
+        build = model_builder(self.version)
         self.model = build(socket)
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         # The batch and the arrays bound to it. The models a simulation runs on are read

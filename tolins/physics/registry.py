@@ -15,6 +15,7 @@ from tolins.physics.kinematic import KinematicBackend, KinematicBatch
 from tolins.physics.mujoco import MujocoBackend, MujocoBatch
 from tolins.physics.panda import PandaBackend, PandaBatch
 from tolins.physics.protocol import Backend, BatchPhysics
+from tolins.physics.versions import PhysicsVersion
 from tolins.physics.warp import WarpBatch
 
 
@@ -57,6 +58,13 @@ ROBOTS: dict[str, dict[str, Simulator]] = {
 }
 
 
+#: Why a robot runs on its simulators alone.
+ROBOT_ONLY_ON = {
+    "panda": "the arm's law is compiled for the CPU and runs between MuJoCo's physics steps, "
+    "where MuJoCo Warp's kernels cannot call it; the kinematic simulator has no arm",
+}
+
+
 def check_robot(robot: object) -> str:
     """``robot`` if it is one of :data:`ROBOTS`; ``ValueError`` naming them otherwise."""
     if not isinstance(robot, str) or robot not in ROBOTS:
@@ -71,7 +79,9 @@ def simulator(name: object, *, single: bool = False, robot: str = "free") -> Sim
         names = tuple(n for n, s in ROBOTS[robot].items() if s.single is not None or not single)
         if name not in names:
             on = ", ".join(map(repr, names))
-            raise ValueError(f"backend={name!r} with robot={robot!r}; allowed: {on}")
+            raise ValueError(
+                f"backend={name!r} with robot={robot!r}; allowed: {on} ({ROBOT_ONLY_ON[robot]})"
+            )
         return ROBOTS[robot][name]
     names = BACKENDS if single else BATCH_BACKENDS
     if not isinstance(name, str) or name not in names:
@@ -97,9 +107,14 @@ def taking_defect(kind: str) -> tuple[str, ...]:
 
 
 def make_backend(
-    name: str, spec: SocketSpec, control_dt: float, physics_version: int = 1, robot: str = "free"
+    name: str,
+    spec: SocketSpec,
+    control_dt: float,
+    physics_version: int | PhysicsVersion = 1,
+    robot: str = "free",
 ) -> Backend:
-    """The single env's backend ``name`` for ``spec`` (:mod:`tolins.physics.versions`) with
+    """The single env's backend ``name`` for ``spec`` in a physics version (its number or the
+    :class:`~tolins.physics.versions.PhysicsVersion` the task's settings resolved) with
     ``robot`` holding the workpiece."""
     chosen = simulator(name, single=True, robot=robot)
     return chosen.single(spec, control_dt, physics_version=physics_version)
@@ -111,7 +126,7 @@ def make_batch(
     num_envs: int,
     control_dt: float,
     *,
-    physics_version: int = 1,
+    physics_version: int | PhysicsVersion = 1,
     num_threads: int | None = None,
     device: str | None = None,
     persistent: bool = False,

@@ -87,7 +87,11 @@ def check_version_robot(version: PhysicsVersion, robot: str) -> None:
 
 
 def physics_version(value: object) -> PhysicsVersion:
-    """The version numbered ``value``; ``ValueError`` naming the allowed numbers otherwise."""
+    """The version numbered ``value``, or ``value`` itself if it is a :class:`PhysicsVersion`
+    already (resolved once, by the task's settings, and handed down as is); ``ValueError``
+    naming the allowed numbers otherwise."""
+    if isinstance(value, PhysicsVersion):
+        return value
     allowed = ", ".join(map(str, VERSIONS))
     if isinstance(value, bool) or not isinstance(value, Integral) or int(value) not in VERSIONS:
         raise ValueError(f"physics_version={value!r}; allowed: {allowed}")

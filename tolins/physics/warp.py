@@ -43,6 +43,7 @@ from tolins.physics.compiled import model_builder
 from tolins.physics.protocol import BatchState, Capabilities
 from tolins.physics.schedule import control_plan
 from tolins.physics.servo import servo_control_step
+from tolins.physics.versions import PhysicsVersion
 
 _INSTALL = "pip install 'tolins[warp]'"
 #: Contact buffer per pin and world (at least :data:`MIN_CONTACTS`). The most contacts on
@@ -143,7 +144,7 @@ class WarpBatch(Capabilities):
         contact_checks: int | None = None,
         nconmax: int | None = None,
         njmax: int | None = None,
-        physics_version: int = 1,
+        physics_version: int | PhysicsVersion = 1,
     ) -> None:
         self._build = model_builder(physics_version)
         wp, mjw = _import_warp()

@@ -70,6 +70,7 @@ from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import contact_chunks, control_plan
 from tolins.physics.servo import run_plan, simulation_fault
+from tolins.physics.versions import PhysicsVersion
 from tolins.physics.versions import physics_version as physics_version_of
 
 #: A batch of one's simulation ids.
@@ -85,7 +86,9 @@ SETTLE = 0.3
 DROPPED = 3.0
 
 
-def compile_panda_world(socket: SocketSpec, physics_version: int = 2) -> mujoco.MjModel:
+def compile_panda_world(
+    socket: SocketSpec, physics_version: int | PhysicsVersion = 2
+) -> mujoco.MjModel:
     """The compiled Panda world of ``socket`` for a physics version (its board in the world
     body from version 2 on, a firm grip from version 3, :mod:`tolins.physics.versions`)."""
     version = physics_version_of(physics_version)
@@ -93,7 +96,7 @@ def compile_panda_world(socket: SocketSpec, physics_version: int = 2) -> mujoco.
     return world.compile()
 
 
-def default_gains(physics_version: int = 2) -> Gains:
+def default_gains(physics_version: int | PhysicsVersion = 2) -> Gains:
     """The law's gains in a physics version: :class:`~tolins.physics.arm.Gains`'s defaults,
     along x and y :data:`~tolins.physics.arm.SIDEWAYS_STIFFNESS` from version 3."""
     gains = Gains()
@@ -139,7 +142,9 @@ STIFF_SIDEWAYS_MIN_RATE = 500
 STIFF_SIDEWAYS_MAX_GAIN = 2.0
 
 
-def check_gain_range(physics_version: int, servo_gain: tuple[float, float] | None) -> None:
+def check_gain_range(
+    physics_version: int | PhysicsVersion, servo_gain: tuple[float, float] | None
+) -> None:
     """``ValueError`` if a randomised ``servo_gain`` range reaches beyond what the law of a
     physics version stays stable with (:data:`STIFF_SIDEWAYS_MAX_GAIN` where it is stiff
     sideways)."""
@@ -154,7 +159,7 @@ def check_gain_range(physics_version: int, servo_gain: tuple[float, float] | Non
         )
 
 
-def check_version_rate(physics_version: int, law_rate: int) -> None:
+def check_version_rate(physics_version: int | PhysicsVersion, law_rate: int) -> None:
     """``ValueError`` if a physics version's law is unstable at ``law_rate`` Hz (below
     :data:`STIFF_SIDEWAYS_MIN_RATE` where it is stiff sideways)."""
     version = physics_version_of(physics_version)
@@ -448,7 +453,7 @@ class PandaBatch(Capabilities):
         socket: SocketSpec,
         num_envs: int,
         control_dt: float,
-        physics_version: int = 2,
+        physics_version: int | PhysicsVersion = 2,
         law_rate: int = LAW_RATE,
         gains: Gains | None = None,
         contact_checks: int | None = None,
@@ -457,17 +462,17 @@ class PandaBatch(Capabilities):
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = check_threads(default_threads() if num_threads is None else num_threads)
         self.version = physics_version_of(physics_version)
-        build = functools.partial(compile_panda_world, physics_version=physics_version)
+        build = functools.partial(compile_panda_world, physics_version=self.version)
         self.model = build(socket)
         self._compiled = SocketCache(build, socket, 2 * self.num_envs, own=self.model)
         self._sockets = [socket] * self.num_envs
         models = [self.model] * self.num_envs
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
-        self.arm = Arm(self.model, gains or default_gains(physics_version))
+        self.arm = Arm(self.model, gains or default_gains(self.version))
         self.sims = PandaSimulations(
             self.arm, models, datas, control_dt, law_rate, contact_checks, threads
         )
-        check_version_rate(physics_version, law_rate)
+        check_version_rate(self.version, law_rate)
 
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
@@ -528,7 +533,7 @@ class PandaBackend(Capabilities):
         self,
         spec: SocketSpec,
         control_dt: float,
-        physics_version: int = 2,
+        physics_version: int | PhysicsVersion = 2,
         law_rate: int = LAW_RATE,
         gains: Gains | None = None,
     ) -> None:

@@ -12,13 +12,15 @@ import numpy as np
 import rerun as rr
 
 from tolins.geometry.specs import SocketSpec
-from tolins.record.arm import ArmDrawing, log_arm
+from tolins.record.arm import ArmDrawing, log_arm, log_handle
 from tolins.record.layout import (
     FORCE_SCALE,
     SIM_TIME,
     STEP,
+    WRIST_FORCE_COLOR,
     arm_path,
     force_path,
+    handle_path,
     plugs_path,
     series_path,
     workpiece_path,
@@ -197,11 +199,13 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
 
 
 def _send_arm(stream: rr.RecordingStream, episode: EpisodeBuffer, rows: list) -> None:
-    """The robot of ``episode``: its meshes, its links' poses and the wrist's force (an
-    arrow at the flange and the series ``sensed_wrench``) as columns."""
+    """The robot of ``episode``: its meshes, the handle on the workpiece, its links' poses
+    and the wrist's force (an arrow at the flange every row and the series
+    ``sensed_wrench``) as columns."""
     k, drawing = episode.index, episode.arm
     root = arm_path(k)
     log_arm(stream, root, drawing)
+    log_handle(stream, handle_path(k), drawing)
     poses = np.stack(episode.arm_poses)  # (rows, links, 7)
     for j, link in enumerate(drawing.links):
         stream.send_columns(
@@ -211,6 +215,9 @@ def _send_arm(stream: rr.RecordingStream, episode: EpisodeBuffer, rows: list) ->
         )
     if len(episode.sensed_wrenches) == len(poses):
         sensed = np.array(episode.sensed_wrenches)
+        stream.log(
+            wrist_force_path(k), rr.Arrows3D.from_fields(colors=WRIST_FORCE_COLOR), static=True
+        )
         stream.send_columns(
             wrist_force_path(k),
             indexes=rows,

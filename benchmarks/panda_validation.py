@@ -31,29 +31,29 @@ import gymnasium as gym
 import numpy as np
 
 import tolins  # noqa: F401  (registers the ids)
-from tolins.physics import arm as arm_law
-from tolins.physics.panda import LAW_RATE, PandaBackend
+from tolins.physics.panda import LAW_RATE, PandaBackend, PandaSimulations
 from tolins.policies import EXPERTS
 
 
 class LimitWatch:
-    """Counts the law's updates with a motor at its torque limit (wraps the law)."""
+    """Counts the law's updates with a motor at its torque limit (wraps every simulation's
+    law update and reads the torques it set)."""
 
     def __init__(self) -> None:
         self.updates = self.saturated = 0
-        self._law = arm_law.Arm.batch_torques
+        self._law = PandaSimulations._update_law
         watch = self
 
-        def counted(arm, *args, **kwargs):
-            tau = watch._law(arm, *args, **kwargs)
-            watch.updates += len(tau)
-            watch.saturated += int(np.any(np.abs(tau) >= arm.limit * (1 - 1e-9), axis=1).sum())
-            return tau
+        def counted(sims, i, *args, **kwargs):
+            watch._law(sims, i, *args, **kwargs)
+            tau = sims.datas[i].ctrl[sims.arm.motors]
+            watch.updates += 1
+            watch.saturated += int(np.any(np.abs(tau) >= sims.arm.limit * (1 - 1e-9)))
 
-        arm_law.Arm.batch_torques = counted
+        PandaSimulations._update_law = counted
 
     def close(self) -> None:
-        arm_law.Arm.batch_torques = self._law
+        PandaSimulations._update_law = self._law
 
 
 def run(env_id: str, expert: str, episodes: int, law_rate: int | None = None) -> dict[str, float]:

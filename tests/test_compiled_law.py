@@ -8,11 +8,10 @@ import numpy as np
 import pytest
 
 import tolins  # noqa: F401  (registers the ids)
-from tolins.physics import compiled_law
-from tolins.physics.arm import Gains, LawInputs, grip_rotation
-from tolins.physics.compiled_law import STATE, STATE_SIZE, advance_target
+from tolins.physics.arm import COMPILED, Gains, LawInputs, grip_rotation
+from tolins.physics.law_state import STATE, STATE_SIZE, advance_target
 
-pytestmark = pytest.mark.skipif(not compiled_law.AVAILABLE, reason="needs numba (tolins[robot])")
+pytestmark = pytest.mark.skipif(not COMPILED, reason="needs numba (tolins[robot])")
 
 PANDA = "tolins/Circle2x2Panda-v3"
 
@@ -73,17 +72,22 @@ def test_the_compiled_law_gives_the_numpy_laws_torques(states, gains: Gains) -> 
         assert not np.array_equal(got, np.zeros(7))
 
 
-def test_a_target_moves_along_its_twist_and_stops_at_the_workspace_edge() -> None:
+@pytest.mark.parametrize("compiled", [False, True], ids=["python", "compiled"])
+def test_a_target_moves_along_its_twist_and_stops_at_the_workspace_edge(compiled: bool) -> None:
+    if compiled:
+        from tolins.physics.compiled_law import advance_target as advance
+    else:
+        advance = advance_target
     bounds = np.array([[-1.0, -1.0, 0.0, -0.3], [1.0, 1.0, 10.0, 0.3]])
     state = _law_state([0.9, 0.0, 5.0], 0.29, [4.0, -2.0, 0.0, 0.5, 0.0, 1.0], np.zeros(7))
-    twist = advance_target(state, 0.05, bounds)
+    twist = advance(state, 0.05, bounds)
     np.testing.assert_array_equal(state[STATE["target"]], [1.0, -0.1, 5.0])  # x stopped
     assert state[STATE["yaw"]] == 0.3
     # This update tracks no twist along the blocked axes; the commanded twist is kept.
     np.testing.assert_array_equal(twist, [0.0, -2.0, 0.0, 0.5, 0.0, 0.0])
     np.testing.assert_array_equal(state[STATE["twist"]], [4.0, -2.0, 0.0, 0.5, 0.0, 1.0])
     still = state.copy()
-    np.testing.assert_array_equal(advance_target(state, 0.0, bounds), state[STATE["twist"]])
+    np.testing.assert_array_equal(advance(state, 0.0, bounds), state[STATE["twist"]])
     np.testing.assert_array_equal(state, still)
 
 

@@ -21,6 +21,7 @@ sensor with the weight of the hand and the part removed).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -45,7 +46,7 @@ from tolins.mjcf.panda import (
     WRIST_TORQUE,
     handle_centre_height,
 )
-from tolins.physics.compiled_law import law_torques, pack_gains
+from tolins.physics.law_state import pack_gains
 from tolins.physics.servo import run_plan
 
 #: The IK's start (rad): of the grasps over the board's centre reached from 300 random
@@ -53,6 +54,10 @@ from tolins.physics.servo import run_plan
 #: anywhere in the workspace lie within 0.33 rad of it, so IK stays on this branch.
 READY = np.array([-1.4786, 1.0651, 1.3737, -2.4438, -1.3635, 0.5028, 0.8614])
 
+
+#: Whether numba is here to compile the law (:mod:`tolins.physics.compiled_law`, imported
+#: when a Panda is built); else the law runs in numpy, about 15 times slower.
+COMPILED = importlib.util.find_spec("numba") is not None
 
 #: The law's stiffness along x and y (s⁻²) where a physics version's Panda is stiff
 #: sideways (:mod:`tolins.physics.versions`), eight times :class:`Gains`'s default: over
@@ -121,6 +126,7 @@ class Arm:
         #: What the compiled law reads of the arm: the site, then qpos, dof and motor ids.
         self.index = np.concatenate([[self.site], self.qpos, self.dof, self.motors]).astype(np.intp)
         self._jac = np.zeros((6, model.nv))  # translation rows, then rotation rows
+        self._kernels = None
         self._mass = np.zeros((model.nv, model.nv))
         self._block = np.ix_(self.dof, self.dof)
         self._identity = np.eye(len(self.dof))
@@ -247,14 +253,18 @@ class Arm:
     ) -> None:
         """Set the simulation's motors to the compiled law's torques (:meth:`batch_torques`
         within rounding, :func:`~tolins.physics.compiled_law.law_torques`): ``state`` its
-        target, yaw, twist and posture (:data:`~tolins.physics.compiled_law.STATE`), first
+        target, yaw, twist and posture (:data:`STATE`), first
         moved ``advance`` s along the twist within ``bounds``; ``gains`` of
         :meth:`law_gains`."""
         data = inputs.data
         mujoco.mj_jacSite(model, data, inputs.jacp, inputs.jacr, self.site)
         mujoco.mj_fullM(model, data, inputs.full)
         bounds = _UNBOUNDED if bounds is None else bounds
-        law_torques(
+        if self._kernels is None:
+            from tolins.physics import compiled_law
+
+            self._kernels = compiled_law
+        self._kernels.law_torques(
             inputs.jac,
             inputs.full,
             *inputs.arrays,

@@ -7,48 +7,31 @@ that simulations on several threads update their laws at once. Its algebra is th
 law's (``tests/test_compiled_law.py`` holds them within 1e-9 of each other); the two
 inverses are Cholesky solves here where numpy calls LAPACK's LU, so the last bits differ:
 a Panda step is bit for bit the same in the single env, the vector env and dm_control, all
-of which run this law, not between this law and the numpy one.
+of which run this law, not between this law and the numpy one. Sums run left to right in
+plain loops (no BLAS, no fast-math): the same bits on every CPU.
 
-numba is in the ``robot`` extra; without it :data:`AVAILABLE` is false and the arm runs the
-numpy law (about 15 times slower), with :func:`advance_target` in Python.
+Importing this module imports numba (``tolins[robot]``; about a second), which
+:class:`~tolins.physics.arm.Arm` does when a Panda is built
+(:data:`~tolins.physics.arm.COMPILED`); without numba the arm runs the numpy law.
 """
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # pragma: no cover - the robot extra brings numba
-    numba = None
+from tolins.physics import law_state
 
-#: Whether the compiled law can run here (numba is installed).
-AVAILABLE = numba is not None
+_compile = numba.njit(cache=True, nogil=True)
 
-#: Layout of a simulation's law state vector: the target position (3, mm), yaw (rad), the
-#: commanded twist (6: mm/s, then rad/s) and the posture (one angle per arm joint).
-STATE = {"target": slice(0, 3), "yaw": 3, "twist": slice(4, 10), "posture": slice(10, None)}
-#: Its length for the Panda's seven joints.
-STATE_SIZE = 17
-
-#: Layout of the law's gains vector: stiffness (6), damping (6), force limit (3), the
-#: posture's rate, then the held weight (3, model units).
-GAINS_SIZE = 19
+#: :func:`tolins.physics.law_state.advance_target`, compiled (the same operations, the
+#: same bits).
+advance_target = _compile(law_state.advance_target)
 
 
-def pack_gains(
-    stiffness: np.ndarray,
-    damping: np.ndarray,
-    force_limit: np.ndarray,
-    null: float,
-    held: np.ndarray,
-) -> np.ndarray:
-    """The gains vector :func:`law_torques` reads (:data:`GAINS_SIZE` values)."""
-    return np.concatenate([stiffness, damping, force_limit, [null], held]).astype(float)
-
-
+@_compile
 def _cholesky_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """``matrix⁻¹ rhs`` of a symmetric positive-definite ``matrix`` (Cholesky, in place
     of neither)."""
@@ -79,6 +62,7 @@ def _cholesky_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return out
 
 
+@_compile
 def _matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a @ b`` summed left to right (no BLAS: the same bits on every CPU)."""
     out = np.zeros((a.shape[0], b.shape[1]))
@@ -91,6 +75,7 @@ def _matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+@_compile
 def _matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``a @ x`` summed left to right."""
     out = np.zeros(a.shape[0])
@@ -102,23 +87,8 @@ def _matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def advance_target(state: np.ndarray, advance: float, bounds: np.ndarray) -> np.ndarray:
-    """Move a law state's target ``advance`` s along its twist within ``bounds`` (the rows
-    low and high of ``[x, y, z, yaw]``): a target beyond is put back on the edge, and the
-    twist this update tracks (returned) has that axis dropped. Nothing moves at 0."""
-    twist = state[4:10].copy()
-    if advance > 0.0:
-        for r in range(4):
-            at = 3 if r == 3 else r  # the yaw's slot; its twist is the last
-            turn = 5 if r == 3 else r
-            state[at] += state[4 + turn] * advance
-            if state[at] < bounds[0, r] or state[at] > bounds[1, r]:
-                state[at] = min(max(state[at], bounds[0, r]), bounds[1, r])
-                twist[turn] = 0.0
-    return twist
-
-
-def _law_torques(
+@_compile
+def law_torques(
     jac_full: np.ndarray,
     mass_full: np.ndarray,
     qpos: np.ndarray,
@@ -139,7 +109,8 @@ def _law_torques(
     grip site's Jacobian, ``mass_full`` ``(nv, nv)`` the dense inertia, then the data's
     ``qpos``, ``qvel``, ``site_xpos``, ``site_xmat``, ``qfrc_bias`` and ``ctrl``; ``index``
     the grip site's id, then the arm's qpos addresses, dof addresses and motors (7 each);
-    ``gains`` of :func:`pack_gains`; ``state`` :data:`STATE_SIZE` values (:data:`STATE`);
+    ``gains`` of :func:`~tolins.physics.law_state.pack_gains`; ``state`` the law state
+    (:data:`~tolins.physics.law_state.STATE`);
     ``limit`` the motors' torque limits."""
     n = (index.shape[0] - 1) // 3
     site = index[0]
@@ -204,13 +175,3 @@ def _law_torques(
     for j in range(n):
         value = tau[j] + bias_full[dof[j]]
         ctrl[motors[j]] = min(max(value, -limit[j]), limit[j])
-
-
-if AVAILABLE:
-    _compile = numba.njit(cache=True, nogil=True)
-    _cholesky_solve = _compile(_cholesky_solve)
-    _matmul, _matvec = _compile(_matmul), _compile(_matvec)
-    advance_target = _compile(advance_target)
-    law_torques = _compile(_law_torques)
-else:  # pragma: no cover
-    law_torques = _law_torques

@@ -51,8 +51,8 @@ from tolins.mjcf.layout import touch_addresses
 from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
 from tolins.mjcf.panda import GRAVITY, handle_centre_height, panda_world
 from tolins.paper import A_MAX
-from tolins.physics import compiled_law
 from tolins.physics.arm import (
+    COMPILED,
     SIDEWAYS_STIFFNESS,
     Arm,
     Gains,
@@ -64,7 +64,7 @@ from tolins.physics.arm import (
     wrist_wrench,
 )
 from tolins.physics.compiled import SocketCache
-from tolins.physics.compiled_law import STATE, STATE_SIZE, advance_target
+from tolins.physics.law_state import STATE, STATE_SIZE, advance_target
 from tolins.physics.mujoco import check_threads, default_threads
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
@@ -228,7 +228,7 @@ class PandaSimulations:
         self.plan = update_plan(self.nstep, self.checks, self.every)
         self.num_threads = num_threads
         n = len(datas)
-        #: Each simulation's law state (:data:`~tolins.physics.compiled_law.STATE`); the
+        #: Each simulation's law state (:data:`~tolins.physics.law_state.STATE`); the
         #: target, yaw, twist and posture below are views of it.
         self.law_state = np.zeros((n, STATE_SIZE))
         self.target = self.law_state[:, STATE["target"]]
@@ -256,7 +256,7 @@ class PandaSimulations:
         self._pool: ThreadPoolExecutor | None = None
         #: Whether the law runs compiled (numba), else in numpy: the same law within
         #: rounding (:mod:`tolins.physics.compiled_law`), the numpy one about 15 times slower.
-        self.compiled = compiled_law.AVAILABLE
+        self.compiled = COMPILED
 
     def __getstate__(self) -> dict[str, object]:
         # Threads and the law's bindings to the datas' memory are this process's own.

@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from tolins.bench.jobs import row_evaluation
-from tolins.bench.pipeline.config import BenchConfig, BenchRun
+from tolins.bench.pipeline.config import BenchConfig
 from tolins.bench.pipeline.runner import plan_bench, run_bench
 from tolins.bench.store.cache import MARKER, StageCache, stage_key
 from tolins.bench.table.claims import CLAIMS, HELD, INCONCLUSIVE, NOT_EVALUATED, NOT_HELD
@@ -118,7 +119,6 @@ def test_a_stage_that_raises_is_its_traceback_and_exit_1_naming_it(capsys, tmp_p
     assert not (tmp_path / "results.json").exists()
 
 
-@pytest.mark.slow
 def _send_sigint(process: subprocess.Popen, to: str) -> None:
     """SIGINT to ``process`` as a whole (the kernel picks the thread), or to one of its
     threads other than the main one (what the kernel does while the main thread has signals
@@ -132,6 +132,7 @@ def _send_sigint(process: subprocess.Popen, to: str) -> None:
     assert libc.tgkill(process.pid, max(threads), signal.SIGINT) == 0, ctypes.get_errno()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="tgkill and /proc are Linux's")
 @pytest.mark.parametrize("to", ["process", "worker thread"])
 def test_ctrl_c_stops_the_running_training_and_exits_130(tmp_path, to):
@@ -267,17 +268,14 @@ def _check_outputs(out: Path, backend: str) -> dict:
     return results
 
 
-@pytest.fixture(scope="module")
-def kinematic_tiny(tmp_path_factory) -> tuple[Path, BenchRun]:
-    """The whole tiny bench on the kinematic backend, run once for the file: its folder
-    (the first test below goes on in it) and its run (the figures other runs must give)."""
-    out = tmp_path_factory.mktemp("kinematic-tiny")
-    return out, run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(out)))
-
-
 @pytest.mark.slow
-def test_tiny_bench_on_both_backends_resumes_from_its_cache(kinematic_tiny):
-    tmp_path, kinematic = kinematic_tiny
+def test_tiny_bench_on_both_backends_resumes_from_its_cache(tiny_bench, tmp_path):
+    """The whole tiny bench on the kinematic backend (run once for the session, the
+    ``tiny_bench`` fixture of tests/conftest.py), resumed in a copy of its folder, then run
+    on MuJoCo there."""
+    kinematic = tiny_bench.run
+    tmp_path = tmp_path / "bench"
+    shutil.copytree(tiny_bench.folder, tmp_path)
     first = _check_outputs(tmp_path, "kinematic")
     assert kinematic.cached == []
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
@@ -335,8 +333,8 @@ def test_a_dry_run_counts_the_stages_to_run_and_runs_nothing(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_an_interrupted_bench_resumes_to_the_same_results(kinematic_tiny, tmp_path):
-    _, whole = kinematic_tiny
+def test_an_interrupted_bench_resumes_to_the_same_results(tiny_bench, tmp_path):
+    whole = tiny_bench.run
     rows = "C2.2,C2.3,C3.2,C4.1"  # BC and π_n on the 2*2 before π_φ, which is interrupted
 
     def interrupt(line: str) -> None:
@@ -356,13 +354,16 @@ def test_an_interrupted_bench_resumes_to_the_same_results(kinematic_tiny, tmp_pa
 
 @pytest.mark.slow
 def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(
-    kinematic_tiny, tmp_path, monkeypatch
+    tiny_bench, tmp_path, monkeypatch
 ):
     """Interrupted after π_n's RS-GAIL checkpoint (before its stage finished), moved, resumed;
-    moved again, every stage cached; the figures are those of an uninterrupted run."""
+    moved again, every stage cached; the figures are those of an uninterrupted run. (The
+    study, which needs no training, is the whole tiny bench's, already finished in the
+    folder: its own run is the whole bench's.)"""
     from tolins.learning.imitation import runs
 
-    _, whole = kinematic_tiny
+    whole = tiny_bench.run
+    tiny_bench.copy_stages(tmp_path / "a", keep=lambda name: name == "inference-study")
     rows = ["C2.2", "C2.3"]
 
     def config(folder: str) -> BenchConfig:
@@ -385,8 +386,7 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(
 
     (tmp_path / "a").rename(tmp_path / "b")
     resumed = quiet(config("b"))
-    # π_n resumed from its checkpoint (the study, which needs no training, may have run
-    # beside it and finished)
+    # π_n resumed from its checkpoint
     assert {"demos-Circle2x2-safe-seed0-0", "bc_safe-seed0"} <= set(resumed.cached)
     assert "pi_n_safe-seed0" not in resumed.cached
     assert resumed.results == {row: whole.results[row] for row in rows}
@@ -455,7 +455,8 @@ def test_the_bench_parts_import_downwards_only():
     assert not upward, "bench imports against its parts' order:\n" + "\n".join(upward)
 
 
-def test_a_bench_of_deep_rl_rows_only_reports_their_workpieces(tmp_path):
+def test_a_bench_of_deep_rl_rows_only_reports_their_workpieces(tiny_bench, tmp_path):
+    tiny_bench.copy_stages(tmp_path)  # the training and evaluation of the row: its reports
     bench = run_bench(_no_sections(tmp_path, rows="R1.1"), progress=False, log=lambda _: None)
     assert list(bench.results) == ["R1.1"]
     assert (tmp_path / "tolerance_images.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -14,7 +14,7 @@ from dm_env import StepType, test_utils
 import tolins
 from tolins import dmc
 from tolins.envs import TASKS, InsertionEnv
-from tolins.envs.tasks import GRADE_TASKS, PRESETS, ROBOT_TASKS
+from tolins.envs.tasks import DELICATE_TASKS, GRADE_TASKS, PRESETS, ROBOT_TASKS
 from tolins.paper import A_MAX, HORIZON, SUCCESS_REWARD
 from tolins.physics.servo import ServoStepper
 
@@ -44,8 +44,12 @@ def _conformance_case(domain: str, task: str) -> type:
 #: The Panda's domains tested for conformance (each compiles the arm's world, ~0.5 s): one
 #: circle, the defective one (its physics rebuilt per episode) and a polygon.
 PANDA_CONFORMANCE = ("circle2x2_panda", "circle2x1_defective_panda", "square_panda")
+#: The delicate domains tested for conformance: one stands for them (same stepper).
+DELICATE_CONFORMANCE = ("circle2x2_delicate",)
 for _domain, _task in dmc.ALL_TASKS:
     if _domain.endswith("_panda") and _domain not in PANDA_CONFORMANCE:
+        continue
+    if _domain.endswith("_delicate") and _domain not in DELICATE_CONFORMANCE:
         continue
     _case = _conformance_case(_domain, _task)
     globals()[_case.__name__] = _case
@@ -53,9 +57,10 @@ del _case, _domain, _task
 
 
 def test_suite_is_built_from_the_task_table() -> None:
-    everything = PRESETS + ROBOT_TASKS
+    everything = PRESETS + ROBOT_TASKS + DELICATE_TASKS
     assert tuple((task.domain, "insert") for task in everything) == dmc.ALL_TASKS
     assert tuple((task.domain, "insert") for task in ROBOT_TASKS) == dmc.ROBOT
+    assert tuple((task.domain, "insert") for task in DELICATE_TASKS) == dmc.DELICATE
     assert set(PANDA_CONFORMANCE) <= {domain for domain, _ in dmc.ROBOT}
     assert [domain for domain, _ in dmc.PAPER] == [
         "circle2x1",

@@ -93,7 +93,8 @@ def test_an_unknown_single_env_keyword_is_named_concisely() -> None:
         gym.make(ENV, rewrad_mode="dense")
     message = str(caught.value)
     assert "'rewrad_mode'" in message and "allowed:" in message and "reward_mode" in message
-    assert "CircularSocket(" not in message and len(message) < 300  # no socket dump
+    # No socket dump: the names only (the list grows with the settings: 3 for delicate pins).
+    assert "CircularSocket(" not in message and len(message) < 400
 
 
 # --- close ------------------------------------------------------------------------------

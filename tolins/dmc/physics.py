@@ -9,6 +9,8 @@ import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
+from tolins.envs.task_settings import ELASTIC_PINS_ON
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import CONTROL_DT
 from tolins.physics.compiled import compile_model
@@ -36,6 +38,9 @@ class InsertionPhysics(dm_mujoco.Physics):
 
     #: The physics version (:mod:`tolins.physics.versions`); :meth:`from_spec` sets it.
     version: PhysicsVersion = VERSIONS[1]
+    #: Elastic-plastic pins (``pins="elastic-plastic"``), or ``None`` (rigid); :meth:`from_spec`
+    #: sets it.
+    pins: ElasticPins | None = None
 
     def _reload_from_data(self, data: dm_mujoco.wrapper.MjData) -> None:
         super()._reload_from_data(data)
@@ -73,29 +78,38 @@ class InsertionPhysics(dm_mujoco.Physics):
 
     @classmethod
     def from_spec(
-        cls, spec: SocketSpec, physics_version: int | PhysicsVersion = 1, robot: str = "free"
+        cls,
+        spec: SocketSpec,
+        physics_version: int | PhysicsVersion = 1,
+        robot: str = "free",
+        pins: ElasticPins | None = None,
     ) -> InsertionPhysics:
         """The physics of ``spec``'s board and workpiece in a physics version (its number, or
         the :class:`PhysicsVersion` the task's settings resolved), ``robot`` holding the part
-        (``"panda"``: a :class:`PandaInsertionPhysics`)."""
+        (``"panda"``: a :class:`PandaInsertionPhysics`), with elastic-plastic ``pins`` (the
+        task's ``settings.elastic``; ``None``: rigid)."""
         if check_robot(robot) != cls.robot:
-            return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot)
+            return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot, pins)
         version = physics_version_of(physics_version)
         check_version_robot(version, robot)
-        physics = cls.from_model(cls.compile(spec, version))
-        if version is not physics.version:
-            physics.version = version
+        if pins is not None and cls.robot != "free":
+            raise ValueError(f"pins='elastic-plastic' with robot={robot!r}; {ELASTIC_PINS_ON}")
+        physics = cls.from_model(cls.compile(spec, version, pins))
+        if version is not physics.version or pins is not None:
+            physics.version, physics.pins = version, pins
             physics._bind_stepper()
         return physics
 
     @classmethod
-    def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
-        """The model of ``spec`` in ``version``."""
-        return dm_mujoco.wrapper.MjModel(compile_model(spec, version))
+    def compile(
+        cls, spec: SocketSpec, version: PhysicsVersion, pins: ElasticPins | None = None
+    ) -> dm_mujoco.wrapper.MjModel:
+        """The model of ``spec`` in ``version`` (with elastic-plastic ``pins``)."""
+        return dm_mujoco.wrapper.MjModel(compile_model(spec, version, pins))
 
     def reload_from_spec(self, spec: SocketSpec) -> None:
         """Replace the model by ``spec``'s (e.g. a new bent-pin workpiece)."""
-        self._reload_from_model(self.compile(spec, self.version))
+        self._reload_from_model(self.compile(spec, self.version, self.pins))
 
     def set_grasp(self, offset: np.ndarray) -> None:
         """Hold the part off by ``offset`` from the next reset on (a robot's only)."""
@@ -111,9 +125,13 @@ class InsertionPhysics(dm_mujoco.Physics):
             self._nominal_of, self._nominal = model, nominal_fields(model)
         apply_draw(model, self._nominal, draw or PhysicsDraw())
 
-    def set_pose(self, pose: np.ndarray) -> BackendState:
-        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
-        self.last_state = self.stepper.reset(pose)
+    def set_pose(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
+        """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest
+        (with ``keep_part``, elastic-plastic pins as bent as they are)."""
+        if keep_part:
+            self.last_state = self.stepper.reset(pose, keep_part)
+        else:
+            self.last_state = self.stepper.reset(pose)
         return self.last_state
 
     def command(self, velocity: np.ndarray) -> None:
@@ -142,7 +160,9 @@ class PandaInsertionPhysics(InsertionPhysics):
         self._bound()
 
     @classmethod
-    def compile(cls, spec: SocketSpec, version: PhysicsVersion) -> dm_mujoco.wrapper.MjModel:
+    def compile(
+        cls, spec: SocketSpec, version: PhysicsVersion, pins: ElasticPins | None = None
+    ) -> dm_mujoco.wrapper.MjModel:
         return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version))
 
     def set_grasp(self, offset: np.ndarray) -> None:

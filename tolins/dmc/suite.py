@@ -10,7 +10,7 @@ from dm_control.utils import containers
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
 from tolins.envs.task_settings import keywords_of
-from tolins.envs.tasks import PRESETS, ROBOT_TASKS, Task
+from tolins.envs.tasks import DELICATE_TASKS, PRESETS, ROBOT_TASKS, Task
 from tolins.paper import CONTROL_DT
 
 TASK_NAME = "insert"
@@ -38,12 +38,17 @@ def make_environment(
         task_kwargs.setdefault("defect_sigma", task.defect_sigma)
     if task.robot != "free":
         task_kwargs.setdefault("robot", task.robot)
+    if task.versions is not None:
         task_kwargs.setdefault("physics_version", max(task.physics_versions))
+    if task.pins != "rigid":
+        task_kwargs.setdefault("pins", task.pins)
     environment_kwargs = {"control_timestep": CONTROL_DT, **(environment_kwargs or {})}
     insert = Insert(task.socket, control_dt=environment_kwargs["control_timestep"], **task_kwargs)
     environment_kwargs["control_timestep"] = insert.settings.control_dt
     settings = insert.settings
-    physics = InsertionPhysics.from_spec(task.socket, settings.version, settings.robot)
+    physics = InsertionPhysics.from_spec(
+        task.socket, settings.version, settings.robot, settings.elastic
+    )
     return control.Environment(physics, insert, **environment_kwargs)
 
 
@@ -54,7 +59,7 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
     def insert(environment_kwargs: dict[str, Any] | None = None, **task_kwargs: Any):
         return make_environment(task, task_kwargs, environment_kwargs)
 
-    gym_id = task.gym_id_of(max(task.physics_versions)) if task.robot != "free" else task.gym_id
+    gym_id = task.gym_id_of(max(task.physics_versions)) if task.versions else task.gym_id
     insert.__doc__ = f"Insert the {task.domain} workpiece (gym id {gym_id})."
     suite.add(*task.tags)(insert)
     return suite
@@ -64,7 +69,7 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
 #: the presets', then the robot tasks' (``circle2x2_panda``, …, on the robot's newest
 #: physics, ``-v3``).
 SUITES: dict[str, containers.TaggedTasks] = {
-    t.domain: _domain_suite(t) for t in PRESETS + ROBOT_TASKS
+    t.domain: _domain_suite(t) for t in PRESETS + ROBOT_TASKS + DELICATE_TASKS
 }
 
 
@@ -84,6 +89,7 @@ POLYGON = get_tasks("polygon")
 GRADE = get_tasks("grade")
 DEFECTIVE = get_tasks("defective")
 ROBOT = get_tasks("robot")
+DELICATE = get_tasks("delicate")
 #: Domain -> its task names.
 TASKS_BY_DOMAIN = {domain: tuple(suite) for domain, suite in SUITES.items()}
 

@@ -34,7 +34,7 @@ from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw
 
 #: The keys ``reset(options=...)`` accepts; each applies to that reset's episode only.
-RESET_OPTIONS = ("pose", "goal")
+RESET_OPTIONS = ("pose", "goal", "keep_part")
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,7 @@ class ResetPlan:
     goal: np.ndarray
     physics: PhysicsDraw | None = None
     grasp: np.ndarray | None = None
+    keep_part: bool = False
 
     def apply_physics(self, set_physics: Callable[[PhysicsDraw], object]) -> None:
         """Hand the episode's randomised physics to a simulator's ``set_physics`` (before
@@ -70,9 +71,30 @@ def check_options(options: dict[str, Any] | None) -> dict[str, Any]:
     unknown = set(options) - set(RESET_OPTIONS)
     if unknown:
         raise ValueError(
-            f"reset options {sorted(map(str, unknown))} are unknown; allowed: 'pose', 'goal'"
+            f"reset options {sorted(map(str, unknown))} are unknown; allowed: "
+            f"{', '.join(map(repr, RESET_OPTIONS))}"
         )
     return options
+
+
+def check_keep_part(settings: TaskSettings, options: dict[str, Any]) -> bool:
+    """``options["keep_part"]`` (default ``False``); ``ValueError`` unless it is a bool, and
+    ``True`` only with elastic-plastic pins (a rigid part has nothing to keep)."""
+    keep = options.get("keep_part", False)
+    if not isinstance(keep, (bool, np.bool_)):
+        raise ValueError(f"options['keep_part']={keep!r}; allowed: True or False")
+    if keep and settings.elastic is None:
+        raise ValueError(
+            "options['keep_part']=True keeps the bends of elastic-plastic pins; allowed: "
+            "pins='elastic-plastic', or keep_part=False"
+        )
+    return bool(keep)
+
+
+def is_damaged(settings: TaskSettings, bend: np.ndarray) -> bool:
+    """Whether a pin's permanent tip offset ``bend`` ``(n_pins, 2)`` (mm) reaches the
+    settings' ``damage_threshold``."""
+    return bool(np.max(np.hypot(bend[:, 0], bend[:, 1])) >= settings.damage_threshold)
 
 
 def check_fixed_pose(settings: TaskSettings, pose: object) -> np.ndarray | None:
@@ -109,6 +131,7 @@ class EpisodeState:
         self.physics: PhysicsDraw | None = None
         self.observation = np.zeros(8)
         self.broken = False
+        self.damaged_at: int | None = None
 
     @property
     def goal(self) -> np.ndarray:
@@ -137,7 +160,10 @@ class EpisodeState:
             options = check_options(options)
             goal = check_goal(options["goal"], "options['goal']") if "goal" in options else None
             goal = self._goal if goal is None else goal
+            keep_part = check_keep_part(self.settings, options)
             socket = self.settings.draw_socket(rng)
+            if keep_part:  # drawn all the same, so the random stream does not change
+                socket = self.socket
             physics = self.settings.draw_physics(rng)
             grasp = self.settings.draw_grasp(rng)
             if "pose" in options:
@@ -150,7 +176,7 @@ class EpisodeState:
         except BaseException:
             self.broken = True
             raise
-        return ResetPlan(socket, pose, goal, physics, grasp)
+        return ResetPlan(socket, pose, goal, physics, grasp, keep_part)
 
     def start(self, plan: ResetPlan, state: BackendState, rng: np.random.Generator) -> np.ndarray:
         """Start the planned episode from the simulator's first ``state``: its first
@@ -158,6 +184,9 @@ class EpisodeState:
         self.socket, self.episode_goal, self.physics = plan.socket, plan.goal, plan.physics
         self.state, self.broken = state, False
         self.score.reset()
+        self.damaged_at = None
+        if state.pin_bend is not None and is_damaged(self.settings, state.pin_bend):
+            self.damaged_at = 0
         self.observation = self._observe(state, rng)
         return self.observation.copy()
 
@@ -205,6 +234,9 @@ class EpisodeState:
             return self.score.fault()
         self.state = state
         score = self.score.score(state, self.socket)
+        bend = state.pin_bend
+        if self.damaged_at is None and bend is not None and is_damaged(self.settings, bend):
+            self.damaged_at = self.score.steps
         self.observation = self._observe(state, rng)
         return score
 
@@ -242,4 +274,9 @@ class EpisodeState:
             info["sensed_pose"] = state.sensed_pose.copy()
         if state.sensed_wrench is not None:
             info["sensed_wrench"] = state.sensed_wrench.copy()
+        if state.pin_bend is not None:
+            info["pin_bend"] = state.pin_bend.copy()
+            info["pin_deflection"] = state.pin_deflection.copy()
+            info["damaged"] = self.damaged_at is not None
+            info["damaged_at"] = self.damaged_at
         return info

@@ -253,7 +253,12 @@ class InsertionEnv(gym.Env, SettingsAttributes):
         self.action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
         self.backend: Backend | None = make_backend(
-            backend, socket, self.control_dt, self.settings.version, self.settings.robot
+            backend,
+            socket,
+            self.control_dt,
+            self.settings.version,
+            self.settings.robot,
+            self.settings.elastic,
         )
         self._episode = EpisodeState(self.settings, goal)
         self._renderer = None
@@ -285,7 +290,11 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             self._close_renderer()  # it draws the previous workpiece's model
         plan.apply_physics(self.backend.set_physics)
         plan.apply_grasp(lambda grasp: self.backend.set_grasp(grasp))
-        return self._episode.begin(plan, self.backend.reset(plan.pose), self.np_random)
+        if plan.keep_part:
+            state = self.backend.reset(plan.pose, keep_part=True)
+        else:
+            state = self.backend.reset(plan.pose)
+        return self._episode.begin(plan, state, self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         self._check_open()

@@ -22,6 +22,7 @@ import numpy as np
 from tolins.envs.initial_pose import InitialPoseDistribution, check_initial_pose, spread_pose
 from tolins.envs.reward import check_reward_mode
 from tolins.geometry.defects import check_defect_sigma, check_defects, sample_defects
+from tolins.geometry.delicate import ElasticPins, check_pins
 from tolins.geometry.specs import CircularSocket, PolygonSocket, SocketSpec
 from tolins.geometry.validation import check_int, check_positive, checked_array, finite_vector
 from tolins.geometry.workspace import PIN_LENGTH, in_holes
@@ -87,6 +88,16 @@ class TaskSettings:
             an offset along the pads that is not the draw's: the part's true offset is
             ``info["pose"] - info["sensed_pose"]``. A robot's only; three stds (a single
             number is refused), each at most :data:`MAX_GRASP_ERROR_STD`.
+        pins: ``"rigid"`` (the default, the paper's) or ``"elastic-plastic"``: round pins
+            that bend under load and stay bent beyond their yield moment (docs/delicate.md;
+            MuJoCo's single env and dm_control; :mod:`tolins.physics.plasticity`).
+        pin_material: With elastic-plastic pins, their material: a preset name
+            (``"phosphor_bronze"``, the default, ``"brass"``, ``"alloy42"``) or a mapping
+            ``{"youngs_modulus": GPa, "yield_strength": MPa[, "density": g/cm³]}``
+            (:func:`~tolins.geometry.materials.pin_material`); kept resolved.
+        damage_threshold: With elastic-plastic pins, the permanent tip offset (mm) from which
+            a pin counts as damaged (``info["damaged"]``), in ``(0, clearance]``; default half
+            the socket's radial clearance.
         version: Not a keyword: the :class:`~tolins.physics.versions.PhysicsVersion` of
             ``physics_version``, looked up once here; what the envs hand their simulators.
     """
@@ -106,7 +117,11 @@ class TaskSettings:
     physics_version: int = 1
     robot: str = "free"
     grasp_error: Any = None
+    pins: str = "rigid"
+    pin_material: Any = None
+    damage_threshold: float | None = None
     version: PhysicsVersion = field(init=False, repr=False)
+    elastic: ElasticPins | None = field(init=False, repr=False)
 
     @classmethod
     def build(
@@ -157,6 +172,11 @@ class TaskSettings:
         if self.robot == "panda" and self.randomization is not None:
             check_gain_range(self.version, self.randomization.servo_gain)
         set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))
+        elastic = check_pins(self.socket, self.pins, self.pin_material, self.damage_threshold)
+        set_(self, "elastic", elastic)
+        if elastic is not None:
+            set_(self, "pin_material", elastic.material)
+            set_(self, "damage_threshold", elastic.damage_threshold)
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
             try:
@@ -230,6 +250,11 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
     cls = chosen.single if single else chosen.batch
     robot = "" if settings.robot == "free" else f", robot={settings.robot!r}"
     on = f"backend={backend!r}{robot}"
+    if settings.elastic is not None and not cls.supports_elastic_pins:
+        where = "" if single else " in the vector env"
+        raise ValueError(
+            f"pins='elastic-plastic' is not supported on {on}{where}; {ELASTIC_PINS_ON}"
+        )
     if settings.randomization is not None and not cls.supports_randomization:
         raise ValueError(f"randomization is not supported on {on}")
     kind = None if settings.defects is None else settings.defects[0]
@@ -244,6 +269,14 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
             f"defects={settings.defects!r} is not supported on {on}; allowed: "
             f"the single env, or backend {', '.join(map(repr, supported))}"
         )
+
+
+#: Where ``pins="elastic-plastic"`` runs, and why not elsewhere.
+ELASTIC_PINS_ON = (
+    "allowed: backend='mujoco' with robot='free' (the single env, the vector env and "
+    "dm_control; the kinematic and Warp simulators have no bending pins, the Panda's stepper "
+    "does not run the pins' return mapping yet)"
+)
 
 
 #: The keywords of :class:`TaskSettings` an env takes besides its socket.

@@ -40,6 +40,7 @@ class Task:
         robot: What holds the workpiece (``"free"``, the paper's servos, or ``"panda"``).
         versions: The physics versions it is registered in (``None``: every one its robot
             has, :func:`~tolins.physics.versions.versions_of`).
+        pins: ``"rigid"`` or ``"elastic-plastic"`` (the ``delicate`` tasks).
     """
 
     name: str
@@ -49,6 +50,7 @@ class Task:
     defect_sigma: float | None = None
     robot: str = "free"
     versions: tuple[int, ...] | None = None
+    pins: str = "rigid"
 
     @property
     def physics_versions(self) -> tuple[int, ...]:
@@ -73,6 +75,8 @@ class Task:
             kwargs["physics_version"] = version
         if self.robot != "free":
             kwargs["robot"] = self.robot
+        if self.pins != "rigid":
+            kwargs["pins"] = self.pins
         return kwargs
 
     @property
@@ -155,8 +159,33 @@ def _on_panda(task: Task) -> Task:
 ROBOT_TASKS: tuple[Task, ...] = tuple(
     _on_panda(task) for task in TASKS + GRADE_TASKS if task in TASKS or "fit50" in task.tags
 )
+
+
+def _delicate(task: Task) -> Task:
+    """``task`` with pins that bend and stay bent (``pins="elastic-plastic"``, phosphor
+    bronze, docs/delicate.md), on physics version 2, tagged ``delicate`` (not ``paper`` or
+    ``grade``: those suites stay the rigid pins')."""
+    return Task(
+        name=f"{task.name}Delicate",
+        domain=f"{task.domain}_delicate",
+        socket=task.socket,
+        tags=("delicate", *(t for t in task.tags if t not in ("paper", "grade"))),
+        versions=(2,),
+        pins="elastic-plastic",
+    )
+
+
+#: The paper's round-pin workpieces and their 50 µm grades with delicate pins: gymnasium
+#: ids ``tolins/{name}Delicate-v2``.
+DELICATE_TASKS: tuple[Task, ...] = tuple(
+    _delicate(task)
+    for task in TASKS + GRADE_TASKS
+    if task.socket.family == "circle"
+    and task.defect_sigma is None
+    and (task in TASKS or "fit50" in task.tags)
+)
 #: Every task that has gymnasium ids.
-GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS
+GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS + DELICATE_TASKS
 #: The generic ids by physics version; pass ``socket=`` (and any other keyword) to
 #: ``gymnasium.make``.
 GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in versions_of("free")}

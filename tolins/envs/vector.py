@@ -54,8 +54,13 @@ def batch_infos(infos: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
         where: Any = slice(None) if len(rows) == n else rows
         first = values[0]
         array: Any
-        if key == "final_obs" or not (
-            isinstance(first, (dict, np.ndarray, np.number)) or type(first) in (int, float, bool)
+        if (
+            key == "final_obs"
+            or not (
+                isinstance(first, (dict, np.ndarray, np.number))
+                or type(first) in (int, float, bool)
+            )
+            or any(value is None for value in values)  # info["damaged_at"]: a step or None
         ):  # gymnasium keeps these (and every final_obs) as objects
             array = np.full(n, None, dtype=object)
             for i, value in zip(rows, values, strict=True):
@@ -204,6 +209,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             device=device,
             persistent=render_mode is not None,
             robot=self.settings.robot,
+            pins=self.settings.elastic,
         )
         self.single_action_space = gym.spaces.Box(-A_MAX, A_MAX, dtype=np.float64)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (8,), np.float64)
@@ -319,7 +325,12 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             self.physics.set_socket(i, plan.socket)
             plan.apply_physics(lambda draw, i=i: self.physics.set_physics(i, draw))
             plan.apply_grasp(lambda grasp, i=i: self.physics.set_grasp(i, grasp))
-        state = self.physics.reset(ids, np.array([plan.pose for plan in plans]))
+        poses = np.array([plan.pose for plan in plans])
+        keep = np.array([plan.keep_part for plan in plans], dtype=bool)
+        if keep.any():
+            state = self.physics.reset(ids, poses, keep_part=keep)
+        else:
+            state = self.physics.reset(ids, poses)
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
             row = state.row(k)

@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import (
     CIRCLE_HOLE_SIDES,
     CircularSocket,
@@ -42,6 +43,7 @@ from tolins.geometry.specs import (
 from tolins.geometry.workspace import PIN_LENGTH, POSE_HIGH, POSE_LOW, reach
 from tolins.mjcf.board import BOARD_MARGIN, board_boxes, hole_wall_pieces
 from tolins.mjcf.contacts import pair_order, pin_reach_boxes, reachable
+from tolins.mjcf.elastic_pins import elastic_pin_bodies
 from tolins.mjcf.xml import num, nums
 from tolins.paper import A_MAX
 
@@ -253,16 +255,21 @@ def _pin_geoms(spec: SocketSpec) -> tuple[list[str], list[str]]:
     return [asset], [f'<geom name="{pin_geom_name(0)}" class="pin" type="mesh" mesh="peg"/>']
 
 
-def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
-    """Per pin: a tip site, and a box zone around the pin read by a touch sensor (N summed
-    over the pin's contacts, without cancellation)."""
+def _zone_size(spec: SocketSpec) -> str:
+    """Half-sizes of each pin's touch zone: around the pin, never overlapping a neighbour's."""
     centers = spec.pin_centers
     gaps = np.max(np.abs(centers[:, None] - centers[None]), axis=2)
     gaps[np.diag_indices(len(centers))] = np.inf
     reach = min(
         spec.pin_reach + 0.2, float(gaps.min()) / 2
     )  # zones of neighbouring pins never overlap
-    zone = nums((reach, reach, PIN_LENGTH / 2 + 0.2))
+    return nums((reach, reach, PIN_LENGTH / 2 + 0.2))
+
+
+def _pin_sites(spec: SocketSpec) -> tuple[list[str], list[str]]:
+    """Per pin: a tip site, and a box zone around the pin read by a touch sensor (N summed
+    over the pin's contacts, without cancellation)."""
+    zone = _zone_size(spec)
     sites, sensors = [], []
     levels = spec.shortenings if isinstance(spec, CircularSocket) else np.zeros(1)
     for i, (x, y) in enumerate(spec.pin_centers):
@@ -318,7 +325,13 @@ def _servo(name: str, joint: str, kp: float, inertia: float, limit: float, speed
     )
 
 
-def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool = True) -> str:
+def make_mjcf(
+    spec: SocketSpec,
+    *,
+    contact_pairs: bool = False,
+    board_body: bool = True,
+    elastic: ElasticPins | None = None,
+) -> str:
     """The MJCF model of ``spec``'s board and workpiece. Same spec, same bytes.
 
     ``board_body``: the board's pieces in a static body ``board`` (the default);
@@ -335,14 +348,25 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
     while pins are pressed on the board and dearer everywhere else, because every pair is
     tested every step (``benchmarks/README.md``, "A cheaper contact step"), so they are
     not the default.
+
+    ``elastic``: the round pins bend and stay bent (``pins="elastic-plastic"``): each pin its
+    own body on two root hinges held by calibrated joint equalities
+    (:mod:`tolins.mjcf.elastic_pins`); ``None`` (the default): rigid pins, the bytes as
+    before.
     """
     if not isinstance(spec, (CircularSocket, PolygonSocket)):
         raise ValueError(f"spec={spec!r} is not a socket; allowed: CircularSocket, PolygonSocket")
+    if elastic is not None and not isinstance(spec, CircularSocket):
+        raise ValueError("elastic pins are round pins; allowed: a CircularSocket")
     board_assets, board_geoms = _board_xml(spec, board_body)
     pin_assets, pin_geoms = _pin_geoms(spec)
     pin_sites, touch_sensors = _pin_sites(spec)
     pairs = _contact_pairs(spec) if contact_pairs else []
     timestep = physics_timestep(spec)
+    equalities: list[str] = []
+    if elastic is not None:
+        pin_geoms, equalities = elastic_pin_bodies(spec, elastic, timestep, _zone_size(spec))
+        pin_sites = []
     solref = contact_solref(timestep)
     # With pairs, the pins take no part in automatic collision; a pair's contact
     # parameters are what the two geoms' defaults mix to (friction: the larger of each).
@@ -407,6 +431,7 @@ def make_mjcf(spec: SocketSpec, *, contact_pairs: bool = False, board_body: bool
         "</body>",
         "</worldbody>",
         *(["<contact>", *pairs, "</contact>"] if pairs else []),
+        *equalities,
         "<actuator>",
         _servo("ux", "x", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[0]),
         _servo("uy", "y", SLIDE_KP, slide_mass, FORCE_LIMIT, A_MAX[1]),

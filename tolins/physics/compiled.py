@@ -15,6 +15,7 @@ from typing import Any, Generic, TypeVar
 
 import mujoco
 
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.mjcf import make_mjcf
 from tolins.physics.versions import PhysicsVersion
@@ -23,17 +24,31 @@ from tolins.physics.versions import physics_version as physics_version_of
 T = TypeVar("T")
 
 
-def compile_model(socket: SocketSpec, physics_version: int | PhysicsVersion = 1) -> mujoco.MjModel:
+def compile_model(
+    socket: SocketSpec,
+    physics_version: int | PhysicsVersion = 1,
+    pins: ElasticPins | None = None,
+) -> mujoco.MjModel:
     """The MuJoCo model of ``socket``'s board and workpiece (:func:`tolins.make_mjcf`) for a
-    physics version (:mod:`tolins.physics.versions`: its number or the version itself)."""
+    physics version (:mod:`tolins.physics.versions`: its number or the version itself);
+    ``pins``: elastic-plastic pins (``None``: rigid)."""
     version = physics_version_of(physics_version)
-    return mujoco.MjModel.from_xml_string(make_mjcf(socket, board_body=not version.board_in_world))
+    if pins is None:
+        xml = make_mjcf(socket, board_body=not version.board_in_world)
+    else:
+        xml = make_mjcf(socket, board_body=not version.board_in_world, elastic=pins)
+    return mujoco.MjModel.from_xml_string(xml)
 
 
-def model_builder(physics_version: int | PhysicsVersion) -> Callable[[SocketSpec], mujoco.MjModel]:
-    """:func:`compile_model` of one physics version, looked up here once, as a picklable
-    one-argument function (for a :class:`SocketCache`)."""
-    return functools.partial(compile_model, physics_version=physics_version_of(physics_version))
+def model_builder(
+    physics_version: int | PhysicsVersion, pins: ElasticPins | None = None
+) -> Callable[[SocketSpec], mujoco.MjModel]:
+    """:func:`compile_model` of one physics version (and pins), looked up here once, as a
+    picklable one-argument function (for a :class:`SocketCache`)."""
+    version = physics_version_of(physics_version)
+    if pins is None:
+        return functools.partial(compile_model, physics_version=version)
+    return functools.partial(compile_model, physics_version=version, pins=pins)
 
 
 class SocketCache(Generic[T]):

@@ -141,7 +141,7 @@ def servo_limits(model: mujoco.MjModel) -> ServoLimits:
     mujoco.mj_forward(model, data)
     mass_matrix = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, mass_matrix)
-    inertia = np.diag(mass_matrix).copy()
+    inertia = np.diag(mass_matrix)[: model.nu].copy()  # the servos' joints (not pin hinges)
     kp = model.actuator_gainprm[:, 0]
     ranges = model.actuator_forcerange
     workpiece = model.body("workpiece").id
@@ -158,8 +158,8 @@ def servo_limits(model: mujoco.MjModel) -> ServoLimits:
         kv=-model.actuator_biasprm[:, 2].copy(),
         force_limit=np.minimum(-ranges[:, 0], ranges[:, 1]),
         omega=np.sqrt(kp / inertia),
-        low=model.jnt_range[:, 0].copy(),
-        high=model.jnt_range[:, 1].copy(),
+        low=model.jnt_range[: model.nu, 0].copy(),
+        high=model.jnt_range[: model.nu, 1].copy(),
         lowest=np.float64(data.qpos[z] - extents[moving, 0].min()),
         board_top=np.float64(extents[~moving, 1].max()),
         rest_lowest=np.float64(data.qpos[z] - extents[rest, 0].min()),

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 
 from tolins.geometry.defects import DEFECT_KINDS
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE
@@ -56,11 +57,13 @@ class MujocoBackend(Capabilities):
             steps.
         physics_version: 1 or 2, or that :class:`~tolins.physics.versions.PhysicsVersion`
             (:mod:`tolins.physics.versions`).
+        pins: Elastic-plastic pins (``pins="elastic-plastic"``), or ``None``: rigid pins.
     """
 
     supports_render = True
     supports_randomization = True
     supports_touch_points = True
+    supports_elastic_pins = True
     defect_kinds = frozenset(DEFECT_KINDS)
 
     def __init__(
@@ -69,13 +72,14 @@ class MujocoBackend(Capabilities):
         control_dt: float,
         contact_checks: int | None = None,
         physics_version: int | PhysicsVersion = 1,
+        pins: ElasticPins | None = None,
     ) -> None:
         self.control_dt = control_dt
         self.version = physics_version_of(physics_version)
         self._contact_checks = contact_checks  # as asked: None for the default
         # The nominal model and the workpiece's now; a model is left here at its nominal
         # physics, so a workpiece that comes back starts from its compiled values.
-        self._compiled = SocketCache(model_builder(self.version), spec, size=1)
+        self._compiled = SocketCache(model_builder(self.version, pins), spec, size=1)
         self._load(spec)
 
     def _load(self, spec: SocketSpec) -> None:
@@ -113,8 +117,10 @@ class MujocoBackend(Capabilities):
         """Where each pin presses on the board now (see :meth:`ServoStepper.pin_touch_points`)."""
         return self.stepper.pin_touch_points()
 
-    def reset(self, pose: np.ndarray) -> BackendState:
-        return self.stepper.reset(pose)
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
+        """Place the workpiece at ``pose`` at rest; with ``keep_part`` its elastic-plastic
+        pins keep the bends of the last episode (see :meth:`ServoStepper.reset`)."""
+        return self.stepper.reset(pose, keep_part)
 
     def step(self, velocity: np.ndarray) -> BackendState:
         return self.stepper.step(velocity, self.substeps)
@@ -163,11 +169,14 @@ class MujocoBatch(Capabilities):
             :meth:`drawing` its whole data.
         physics_version: 1 or 2, or that ``PhysicsVersion`` (:mod:`tolins.physics.versions`),
             as the single env's.
+        pins: Elastic-plastic pins, or ``None`` (rigid), as the single env's: then every
+            simulation runs on a model of its own (a copy), which holds its plastic set.
     """
 
     supports_render = True
     supports_randomization = True
     supports_touch_points = True
+    supports_elastic_pins = True
     defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
     batch_options = frozenset({"num_threads", "persistent"})
 
@@ -180,13 +189,15 @@ class MujocoBatch(Capabilities):
         contact_checks: int | None = None,
         persistent: bool = False,
         physics_version: int | PhysicsVersion = 1,
+        pins: ElasticPins | None = None,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = default_threads() if num_threads is None else num_threads
         self.num_threads = check_threads(threads)
         self.version = physics_version_of(physics_version)
         self.socket = socket
-        build = model_builder(self.version)
+        self.elastic = pins is not None
+        build = model_builder(self.version, pins)
         self.model = build(socket)
         self.substeps, self.checks = control_plan(self.model, control_dt, contact_checks)
         # The batch and the arrays bound to it. The models a simulation runs on are read
@@ -208,15 +219,20 @@ class MujocoBatch(Capabilities):
         if socket is self._sockets[index]:
             return
         self._sockets[index] = socket
-        self._models[index] = self._compiled.get(socket)
+        self._models[index] = self._own(self._compiled.get(socket))
         self._models_changed = True
+
+    def _own(self, model: mujoco.MjModel) -> mujoco.MjModel:
+        """``model`` for one simulation: with elastic-plastic pins a copy (its ``eq_data``
+        holds that simulation's plastic set), else the shared model itself."""
+        return copy.copy(model) if self.elastic else model
 
     def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
         """Run simulation ``index`` on its workpiece's model with a randomised-physics
         ``draw`` applied (a copy of its own; ``None``: the workpiece's model)."""
         base = self._compiled.get(self._sockets[index])
         if draw is None or not draw.changes_model:
-            self._models[index] = base
+            self._models[index] = self._own(base)
         else:
             model = copy.copy(base)
             apply_draw(model, nominal_fields(base), draw)
@@ -228,10 +244,16 @@ class MujocoBatch(Capabilities):
             self._servo.set_models(list(self._models))
             self._models_changed = False
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
+        """Place simulations ``ids`` at ``poses`` at rest (``keep_part``: per simulation, its
+        elastic-plastic pins as bent as they are)."""
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
-        return self._servo.reset(ids, poses)
+        if keep_part is None:
+            return self._servo.reset(ids, poses)
+        return self._servo.reset(ids, poses, np.asarray(keep_part, dtype=bool))
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)

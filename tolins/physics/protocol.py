@@ -38,6 +38,10 @@ class BackendState:
         sensed_pose: What the robot's own sensing says the pose is (a robot's forward
             kinematics and nominal grasp), or ``None``: the true ``pose``.
         sensed_wrench: What its wrist sensor says ``wrench`` is, or ``None``: the true one.
+        pin_bend: Each pin's permanent tip offset ``(n_pins, 2)`` (mm, workpiece frame) with
+            elastic-plastic pins, or ``None`` (rigid pins).
+        pin_deflection: Each pin's tip offset now, elastic included ``(n_pins, 2)`` (mm,
+            workpiece frame), or ``None``.
     """
 
     pose: np.ndarray
@@ -46,6 +50,8 @@ class BackendState:
     error: str | None = None
     sensed_pose: np.ndarray | None = None
     sensed_wrench: np.ndarray | None = None
+    pin_bend: np.ndarray | None = None
+    pin_deflection: np.ndarray | None = None
 
     @property
     def observed_pose(self) -> np.ndarray:
@@ -70,6 +76,8 @@ class BatchState:
             is then invalid, as ``BackendState.error``).
         sensed_pose: ``(n, 4)``, as ``BackendState.sensed_pose``, or ``None``.
         sensed_wrench: ``(n, 4)``, as ``BackendState.sensed_wrench``, or ``None``.
+        pin_bend: ``(n, n_pins, 2)``, as ``BackendState.pin_bend``, or ``None``.
+        pin_deflection: ``(n, n_pins, 2)``, as ``BackendState.pin_deflection``, or ``None``.
     """
 
     pose: np.ndarray
@@ -78,12 +86,15 @@ class BatchState:
     errors: tuple[str | None, ...] | None = None
     sensed_pose: np.ndarray | None = None
     sensed_wrench: np.ndarray | None = None
+    pin_bend: np.ndarray | None = None
+    pin_deflection: np.ndarray | None = None
 
     def row(self, i: int) -> BackendState:
         """Row ``i`` as the single env's :class:`BackendState`."""
         error = None if self.errors is None else self.errors[i]
-        sensed = (None if a is None else a[i] for a in (self.sensed_pose, self.sensed_wrench))
-        return BackendState(self.pose[i], self.wrench[i], float(self.peak_force[i]), error, *sensed)
+        rows = (self.sensed_pose, self.sensed_wrench, self.pin_bend, self.pin_deflection)
+        extra = (None if a is None else a[i] for a in rows)
+        return BackendState(self.pose[i], self.wrench[i], float(self.peak_force[i]), error, *extra)
 
 
 class Capabilities:
@@ -102,6 +113,8 @@ class Capabilities:
         batch_options: The keywords of the vector env it takes besides the socket, the
             number of simulations and the control period (``num_threads``, ``device``,
             ``persistent``).
+        supports_elastic_pins: It simulates ``pins="elastic-plastic"`` (pins that bend and
+            stay bent, :mod:`tolins.physics.plasticity`); ``False`` unless a class says so.
     """
 
     supports_render: ClassVar[bool]
@@ -109,6 +122,7 @@ class Capabilities:
     supports_touch_points: ClassVar[bool]
     defect_kinds: ClassVar[frozenset[str]]
     batch_options: ClassVar[frozenset[str]] = frozenset()
+    supports_elastic_pins: ClassVar[bool] = False
 
 
 class Backend(Protocol):

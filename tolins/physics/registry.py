@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.physics.kinematic import KinematicBackend, KinematicBatch
 from tolins.physics.mujoco import MujocoBackend, MujocoBatch
@@ -112,12 +113,18 @@ def make_backend(
     control_dt: float,
     physics_version: int | PhysicsVersion = 1,
     robot: str = "free",
+    pins: ElasticPins | None = None,
 ) -> Backend:
     """The single env's backend ``name`` for ``spec`` in a physics version (its number or the
     :class:`~tolins.physics.versions.PhysicsVersion` the task's settings resolved) with
-    ``robot`` holding the workpiece."""
+    ``robot`` holding the workpiece; ``pins``: elastic-plastic pins (a simulator with
+    ``supports_elastic_pins`` only), ``None``: rigid."""
     chosen = simulator(name, single=True, robot=robot)
-    return chosen.single(spec, control_dt, physics_version=physics_version)
+    if pins is None:
+        return chosen.single(spec, control_dt, physics_version=physics_version)
+    if not chosen.single.supports_elastic_pins:
+        raise ValueError(f"pins='elastic-plastic' is not supported on backend={name!r}")
+    return chosen.single(spec, control_dt, physics_version=physics_version, pins=pins)
 
 
 def make_batch(
@@ -131,12 +138,14 @@ def make_batch(
     device: str | None = None,
     persistent: bool = False,
     robot: str = "free",
+    pins: ElasticPins | None = None,
 ) -> BatchPhysics:
     """The batch ``name`` of ``num_envs`` copies of ``socket``, ``robot`` holding each.
 
     ``num_threads`` and ``persistent`` (every simulation's whole data kept, for drawing)
     are hints that a simulator without threads or without per-simulation data ignores;
-    ``device`` names hardware, so a simulator that runs on none refuses it.
+    ``device`` names hardware, so a simulator that runs on none refuses it. ``pins``:
+    elastic-plastic pins (a simulator with ``supports_elastic_pins`` only), ``None``: rigid.
     """
     cls = simulator(name, robot=robot).batch
     if device is not None and "device" not in cls.batch_options:
@@ -144,4 +153,8 @@ def make_batch(
         raise ValueError(f"device={device!r} is for backend={on} only; got backend={name!r}")
     given = {"num_threads": num_threads, "device": device, "persistent": persistent}
     options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
+    if pins is not None:
+        if not cls.supports_elastic_pins:
+            raise ValueError(f"pins='elastic-plastic' is not supported on backend={name!r}")
+        options["pins"] = pins
     return cls(socket, num_envs, control_dt, physics_version=physics_version, **options)

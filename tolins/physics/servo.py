@@ -15,6 +15,8 @@ helpers here (wrench, faults, touch points) are shared by every MuJoCo stepper.
 from __future__ import annotations
 
 import contextlib
+import copy
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Collection, Iterable, Iterator
@@ -26,6 +28,7 @@ import numpy as np
 
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, model_layout
+from tolins.mjcf.elastic_pins import rescaled
 from tolins.physics.free_flight import (
     FreeStep,
     ServoLimits,
@@ -33,6 +36,7 @@ from tolins.physics.free_flight import (
     free_steps,
     servo_limits,
 )
+from tolins.physics.plasticity import PinPlasticity
 from tolins.physics.protocol import BackendState, BatchState
 from tolins.physics.schedule import CONTACT_CHECKS, contact_chunks
 
@@ -57,15 +61,21 @@ def sensors_off(models: Iterable[mujoco.MjModel]) -> Iterator[None]:
 @contextlib.contextmanager
 def longer_steps(models: Iterable[mujoco.MjModel], factor: int) -> Iterator[None]:
     """The models' physics step ``factor`` times as long inside the block (free flight,
-    :mod:`tolins.physics.free_flight`), restored after it."""
+    :mod:`tolins.physics.free_flight`), restored after it; a model's elastic-plastic pins'
+    equalities recalibrated for that step (:func:`~tolins.mjcf.elastic_pins.rescaled`)."""
     steps = [(model, model.opt.timestep) for model in models] if factor > 1 else []
+    pins = [(m, m.eq_solref.copy(), m.eq_solimp.copy()) for m, _ in steps if m.neq]
     for model, value in steps:
         model.opt.timestep = value * factor
+    for model, solref, solimp in pins:
+        model.eq_solref[:], model.eq_solimp[:] = rescaled(solref, solimp, factor)
     try:
         yield
     finally:
         for model, value in steps:
             model.opt.timestep = value
+        for model, solref, solimp in pins:
+            model.eq_solref[:], model.eq_solimp[:] = solref, solimp
 
 
 def run_segments(
@@ -227,6 +237,13 @@ class ServoStepper:
     steps (:mod:`tolins.physics.free_flight`; ``-v2`` physics); :attr:`step_factor` says by
     how much the last one did (after a window of contact steps).
 
+    A model with elastic-plastic pins (:mod:`tolins.mjcf.elastic_pins`) is stepped in chunks
+    in which no pin can reach yield, the return mapping after each
+    (:class:`~tolins.physics.plasticity.PinPlasticity`, :attr:`plasticity`). In free flight
+    its pins' equalities are recalibrated for the longer step (:func:`longer_steps`; the
+    contact step's calibration diverges at 5 ms), and the pins' reach grows by their tip
+    offsets now (:func:`bent_limits`).
+
     Args:
         model: A model made by :func:`tolins.make_mjcf`.
         data: Its data; read and written in place.
@@ -249,6 +266,8 @@ class ServoStepper:
         self._limits: ServoLimits | None = None
         self._limits_key: tuple | None = None
         self._bind(model, data)
+        hinges = self.layout.pin_hinges
+        self.plasticity = None if hinges is None else PinPlasticity(model, self.layout)
 
     def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Hold ``model`` and ``data`` and the views into ``data`` that the steps read."""
@@ -260,9 +279,11 @@ class ServoStepper:
         self._touch = data.sensordata[layout.touch]
         self._wrench = data.sensordata[layout.force]
         self._warnings = data.warning.number
+        # What the servos' activations follow: the workpiece's joints (then pin hinges).
+        self._servo_q = data.qpos if layout.pin_hinges is None else data.qpos[: model.nu]
 
     #: Attributes that view MjData's buffers: pickled, they would become frozen copies.
-    _VIEWS = ("_touch", "_wrench", "_warnings")
+    _VIEWS = ("_touch", "_wrench", "_warnings", "_servo_q")
 
     def __getstate__(self) -> dict[str, object]:
         # A copy keeps the model, the data (MjData pickles its whole state, the solver's
@@ -278,9 +299,13 @@ class ServoStepper:
         d, layout = self.data, self.layout
         theta = d.qpos[layout.pose_joint[2]]
         wrench = board_wrench(theta, self._wrench.tolist(), d.sensordata[layout.torque_z])
-        return BackendState(
+        state = BackendState(
             pose=d.qpos[layout.pose_joint], wrench=wrench, peak_force=peak_force, error=error
         )
+        if self.plasticity is None:
+            return state
+        bend, deflection = self.plasticity.bend(), self.plasticity.deflection(d.qpos)
+        return dataclasses.replace(state, pin_bend=bend, pin_deflection=deflection)
 
     def contact_force(self) -> float:
         """Summed normal contact force on all pins now (N)."""
@@ -294,9 +319,10 @@ class ServoStepper:
         """Where each pin presses on the board now (see :func:`pin_touch_points`)."""
         return pin_touch_points(self.model, self.data, self.layout.pin_by_geom)
 
-    def reset(self, pose: np.ndarray) -> BackendState:
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
         """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest
-        (the model's parameters are read anew: a randomised-physics draw applies from here)."""
+        (the model's parameters are read anew: a randomised-physics draw applies from here).
+        Elastic-plastic pins start straight, or with ``keep_part`` as bent as they are."""
         m, d = self.model, self.data
         if self.free_flight:
             # Read anew only for another model (held here, so never a reused id) or other
@@ -315,8 +341,14 @@ class ServoStepper:
             ):
                 self._limits, self._limits_key = ServoLimits.stack([servo_limits(m)]), key
         mujoco.mj_resetData(m, d)
-        d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
-        d.act[:] = d.qpos
+        if self.plasticity is None:
+            d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
+            d.act[:] = d.qpos
+        else:
+            d.act[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
+            d.qpos[: m.nu] = d.act
+            self.plasticity.assign(self.plasticity.plastic if keep_part else None)
+            self.plasticity.place(d.qpos, d.qvel)
         mujoco.mj_forward(m, d)
         return self.state(self.contact_force())
 
@@ -342,16 +374,19 @@ class ServoStepper:
         return [sum(self._warnings.tolist())]
 
     def anchor(self) -> None:
-        self.data.act[:] = self.data.qpos
+        self.data.act[:] = self._servo_q
 
     def choose_steps(self, chunks: list[int]) -> None:
         self.step_window, self.step_factor = 0, 1
         if self.free_flight and self._limits is not None:
             d, timestep = self.data, self.model.opt.timestep
+            limits, q = self._limits, slice(None)
+            if self.plasticity is not None:
+                limits, q = bent_limits(limits, [self.plasticity], [d.qpos]), slice(0, 4)
             window, factor = free_flight_plan(
-                self._limits,
-                d.qpos[None],
-                d.qvel[None],
+                limits,
+                d.qpos[None, q],
+                d.qvel[None, q],
                 d.ctrl[None],
                 sum(chunks) * timestep,
                 _free_steps(timestep, tuple(chunks)),
@@ -368,6 +403,14 @@ class ServoStepper:
         not be stepped elsewhere meanwhile."""
         m, d = self.model, self.data
         segments, self._window_left = chunk_segments(n, self._window_left, self.step_factor)
+        if self.plasticity is not None:
+            queue = [[factor, steps] for factor, steps in segments if steps]
+            step = functools.partial(mujoco.mj_step, m, d)
+            while queue:
+                factor, k, last = next_chunk(self.plasticity, d.qpos, d.qvel, d.ctrl, queue)
+                run_chunk(lambda j, step=step: step(nstep=j), [m], factor, k, last)
+                self.plasticity.update(d.qpos)
+            return
         run_segments(lambda k: mujoco.mj_step(m, d, nstep=k), [m], segments, self.lazy_sensors)
 
     def higher_force(self, peak: float) -> float:
@@ -381,6 +424,59 @@ class ServoStepper:
         """Command ``velocity`` ``[ux, uy, utheta, uz]`` for ``nstep`` physics steps."""
         self.command(velocity)
         return self.advance(nstep)
+
+
+def next_chunk(
+    plasticity: PinPlasticity,
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    ctrl: np.ndarray,
+    queue: list[list[int]],
+) -> tuple[int, int, bool]:
+    """The next chunk ``(factor, steps, last)`` of a simulation with elastic-plastic pins,
+    taken off ``queue`` (its segments ``[factor, steps]`` left in a chunk of contact steps):
+    on the contact step as many steps as no pin can reach yield in
+    (:meth:`PinPlasticity.steps`), in free flight the whole segment (nothing touches);
+    ``last``: it ends the chunk of contact steps."""
+    factor, left = queue[0]
+    k = left if factor > 1 else plasticity.steps(qpos, qvel, ctrl, left)
+    queue[0][1] -= k
+    if not queue[0][1]:
+        queue.pop(0)
+    return factor, k, not queue
+
+
+def run_chunk(
+    step: Callable[[int], None],
+    models: list[mujoco.MjModel],
+    factor: int,
+    k: int,
+    last: bool,
+) -> None:
+    """``step(k)`` on ``models`` with physics steps ``factor`` contact steps long, the sensors
+    computed only in its last step when it ends the chunk of contact steps (``last``), else
+    not at all (with :attr:`ServoStepper.lazy_sensors`)."""
+    lazy = ServoStepper.lazy_sensors
+    if last or not lazy:
+        run_segments(step, models, [(factor, k)], lazy)
+        return
+    with longer_steps(models, factor), sensors_off(models):
+        step(k)
+
+
+def bent_limits(
+    limits: ServoLimits, plasticity: list[PinPlasticity], qpos: list[np.ndarray]
+) -> ServoLimits:
+    """``limits`` (stacked, one row per simulation) with each pin's radius and the
+    workpiece's lowest point grown by the largest tip offset now in its simulation, elastic
+    included, and a micrometre: a bent pin reaches that much farther from its axis, and its
+    tilted rim no deeper (the rim drops by r·sin φ, less than the tip's offset L·sin φ)."""
+    grow = np.array(
+        [np.max(np.hypot(*p.deflection(q).T)) + 1e-3 for p, q in zip(plasticity, qpos, strict=True)]
+    )
+    return dataclasses.replace(
+        limits, pin_radius=limits.pin_radius + grow[:, None], lowest=limits.lowest + grow
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -411,6 +507,11 @@ class BatchServo:
         persistent: One ``MjData`` per simulation (``mujoco.batch``'s ``persistent``).
         free_flight: Take the longer step where nothing can touch, per simulation, as
             :class:`ServoStepper` does.
+
+    With elastic-plastic pins each simulation runs on its own model, whose ``eq_data`` holds
+    its plastic set (:class:`~tolins.physics.plasticity.PinPlasticity`), in the chunks and
+    with the return mapping of :class:`ServoStepper`, simulation by simulation, so each is
+    the single env's bit for bit; free flight is off for them, as there.
     """
 
     def __init__(
@@ -425,9 +526,15 @@ class BatchServo:
             model, num_envs, nthread=num_threads, persistent=persistent
         )
         self.layout = model_layout(model)
+        self.elastic = self.layout.pin_hinges is not None
         self.free_flight = free_flight
         self._limits_of: dict[int, tuple[mujoco.MjModel, ServoLimits]] = {}
-        self.set_models([model] * num_envs)
+        self.models: list[mujoco.MjModel] = []
+        self.plasticity: list[PinPlasticity] = []
+        if self.elastic:
+            self.set_models([copy.copy(model) for _ in range(num_envs)])
+        else:
+            self.set_models([model] * num_envs)
         self.qpos, self.qvel = b.bind("qpos"), b.bind("qvel")
         self.act, self.ctrl = b.bind("act"), b.bind("ctrl")
         self.sensordata = b.bind("sensordata")
@@ -437,7 +544,21 @@ class BatchServo:
 
     def set_models(self, models: list[mujoco.MjModel]) -> None:
         """Run simulation ``i`` on ``models[i]`` (one layout; read live by the batch; a
-        model's parameters are read anew here, so set it again after changing them)."""
+        model's parameters are read anew here, so set it again after changing them). With
+        elastic-plastic pins every simulation needs a model of its own; one whose model
+        changes takes its plastic set along (its next reset keeps it or straightens it)."""
+        if self.elastic:
+            if len({id(model) for model in models}) != len(models):
+                raise ValueError("elastic-plastic pins need a model of its own per simulation")
+            old, plasticity = self.models, []
+            for i, model in enumerate(models):
+                if i < len(old) and old[i] is model:
+                    plasticity.append(self.plasticity[i])
+                    continue
+                plasticity.append(PinPlasticity(model, self.layout))
+                if i < len(old):
+                    plasticity[-1].assign(self.plasticity[i].plastic)
+            self.plasticity = plasticity
         self.models = models
         self.batch.set_models(models)
         if self.free_flight:
@@ -451,12 +572,26 @@ class BatchServo:
                     self._limits_of[id(model)] = (model, limits)
             self._limits = ServoLimits.stack([self._limits_of[id(m)][1] for m in models])
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         """Reset simulations ``ids`` and place their workpieces at ``poses`` at rest, as
-        :meth:`ServoStepper.reset` one."""
+        :meth:`ServoStepper.reset` one (``keep_part``: per simulation, its elastic-plastic
+        pins as bent as they are)."""
         self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
-        self.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
-        self.act[ids] = self.qpos[ids]
+        if self.elastic:
+            nu = len(self.layout.joint_pose)
+            self.act[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
+            self.qpos[ids, :nu] = self.act[ids]
+            keep = np.zeros(len(ids), bool) if keep_part is None else keep_part
+            for i, kept in zip(ids.tolist(), keep.tolist(), strict=True):
+                plasticity = self.plasticity[i]
+                plasticity.assign(plasticity.plastic if kept else None)
+                plasticity.place(self.qpos[i], self.qvel[i])
+            self.batch.set_models(self.models)  # the plastic sets in eq_data, read anew
+        else:
+            self.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
+            self.act[ids] = self.qpos[ids]
         self.batch.forward(ids)
         force = sequential_sum(self.sensordata[ids, self.layout.touch]) * FORCE_SCALE
         return self.state(ids, force, None)
@@ -475,7 +610,14 @@ class BatchServo:
                 for q, s in zip(qpos, sensordata, strict=True)
             ]
         ).reshape(len(ids), 4)
-        return BatchState(qpos[:, layout.pose_joint], wrench, peak_force, errors)
+        state = BatchState(qpos[:, layout.pose_joint], wrench, peak_force, errors)
+        if not self.elastic:
+            return state
+        rows = [self.plasticity[i] for i in ids.tolist()]
+        bends = np.array([p.bend() for p in rows]).reshape(len(ids), layout.n_pins, 2)
+        deflections = np.array([p.deflection(q) for p, q in zip(rows, qpos, strict=True)])
+        deflections = deflections.reshape(len(ids), layout.n_pins, 2)
+        return dataclasses.replace(state, pin_bend=bends, pin_deflection=deflections)
 
     def step(self, ids: np.ndarray, nstep: int, checks: int) -> tuple[np.ndarray, tuple]:
         """:func:`servo_control_step` of simulations ``ids`` under their commands."""
@@ -489,7 +631,10 @@ class BatchServo:
         return [sum(warning[i, :, 1].tolist()) for i in self.ids.tolist()]
 
     def anchor(self) -> None:
-        self.act[self.ids] = self.qpos[self.ids]
+        if self.elastic:
+            self.act[self.ids] = self.qpos[self.ids, : len(self.layout.joint_pose)]
+        else:
+            self.act[self.ids] = self.qpos[self.ids]
 
     def choose_steps(self, chunks: list[int]) -> None:
         ids = self.ids
@@ -497,10 +642,15 @@ class BatchServo:
         self.step_factors = np.ones(len(ids), dtype=np.intp)
         if self.free_flight and len(ids):
             timestep = self.models[0].opt.timestep
+            limits, qpos, qvel = self._limits.rows(ids), self.qpos[ids], self.qvel[ids]
+            if self.elastic:
+                pins = [self.plasticity[i] for i in ids.tolist()]
+                limits = bent_limits(limits, pins, list(qpos))
+                qpos, qvel = qpos[:, :4], qvel[:, :4]
             self.step_windows, self.step_factors = free_flight_plan(
-                self._limits.rows(ids),
-                self.qpos[ids],
-                self.qvel[ids],
+                limits,
+                qpos,
+                qvel,
                 self.ctrl[ids],
                 sum(chunks) * timestep,
                 _free_steps(timestep, tuple(chunks)),
@@ -513,6 +663,9 @@ class BatchServo:
     def physics_steps(self, n: int) -> None:
         """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``: one
         ``Batch.step`` per physics step length chosen."""
+        if self.elastic:
+            self._plastic_steps(n)
+            return
         plans = np.stack([self._windows_left, self.step_factors], axis=1)
         for window, factor in np.unique(plans, axis=0).tolist():
             chosen = (self._windows_left == window) & (self.step_factors == factor)
@@ -526,6 +679,31 @@ class BatchServo:
                 segments,
                 ServoStepper.lazy_sensors,
             )
+
+    def _plastic_steps(self, n: int) -> None:
+        """As :meth:`ServoStepper.physics_steps` with elastic-plastic pins, simulation by
+        simulation: each takes the chunks its own state allows (:func:`next_chunk`), one
+        ``Batch.step`` per chunk length, step length and end, then its return mapping."""
+        queues = {}
+        for k, i in enumerate(self.ids.tolist()):
+            window, factor = int(self._windows_left[k]), int(self.step_factors[k])
+            segments, self._windows_left[k] = chunk_segments(n, window, factor)
+            queues[i] = [[f, steps] for f, steps in segments if steps]
+        while queues:
+            chunks = {
+                i: next_chunk(self.plasticity[i], self.qpos[i], self.qvel[i], self.ctrl[i], queue)
+                for i, queue in queues.items()
+            }
+            groups: dict[tuple[int, int, bool], list[int]] = {}
+            for i, chunk in chunks.items():
+                groups.setdefault(chunk, []).append(i)
+            for (factor, k, last), members in groups.items():
+                ids = np.array(members, dtype=np.intp)
+                models = [self.models[i] for i in members]
+                run_chunk(lambda j, ids=ids: self.batch.step(ids, nstep=j), models, factor, k, last)
+            for i in chunks:
+                self.plasticity[i].update(self.qpos[i])
+            queues = {i: queue for i, queue in queues.items() if queue}
 
     def higher_force(self, peak: np.ndarray) -> np.ndarray:
         touch = sequential_sum(self.sensordata[self.ids, self.layout.touch])

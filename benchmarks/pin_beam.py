@@ -1,4 +1,4 @@
-"""Pins that bend and stay bent: which MuJoCo mechanism, measured (issue 48).
+"""Pins that bend and stay bent: which MuJoCo mechanism, measured.
 
 A round pin (diameter d, free length L) is a rigid body on a pair of root hinges (about x,
 then y) carrying the cantilever's root stiffness k_θ = 3EI/L, so that a tip load F bends the

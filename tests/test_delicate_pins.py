@@ -22,13 +22,14 @@ from tolins.physics.servo import ServoStepper
 ELASTIC = {"pins": "elastic-plastic"}
 
 
-def _push(material: object = None) -> dict[str, float]:
+def _push(material: object = None, clearance: float = 0.2) -> dict[str, float]:
     """Pin 0 of a 2*1 socket's generated model (the workpiece held in the air by its servos)
-    loaded at its tip along x through the env's stepper, one physics step per call: a ramp
-    to 1.2 times the yield load, unloading, a rest, and the same ramp again. Returns the
-    figures over beam theory's. A dead load beyond yield turns the pin until its lever
-    shrinks (``F L cos θ = M_y``), so the second yield is compared as a root moment."""
-    spec = CircularSocket(2, 1)
+    at a radial ``clearance`` (its grade's physics step) loaded at its tip along x through
+    the env's stepper, one physics step per call: a ramp to 1.2 times the yield load,
+    unloading, a rest, and the same ramp again. Returns the figures over beam theory's. A
+    dead load beyond yield turns the pin until its lever shrinks (``F L cos θ = M_y``), so
+    the second yield is compared as a root moment."""
+    spec = CircularSocket(2, 1, hole_radius=0.3 + clearance)
     pins = check_pins(spec, "elastic-plastic", material, None)
     model = compile_model(spec, 1, pins)
     data = mujoco.MjData(model)
@@ -74,11 +75,17 @@ def _push(material: object = None) -> dict[str, float]:
     }
 
 
-@pytest.mark.parametrize("material", [None, "alloy42"])
-def test_the_generated_pin_is_the_cantilever_of_beam_theory(material) -> None:
+@pytest.mark.parametrize(
+    ("material", "clearance", "timestep"),
+    [(None, 0.2, 1e-3), ("alloy42", 0.2, 1e-3), (None, 0.05, 5e-4), ("brass", 0.02, 2.5e-4)],
+)
+def test_the_generated_pin_is_the_cantilever_of_beam_theory(material, clearance, timestep):
     """Elastic slope within 5 % of 3EI/L³, first yield within 5 % of M_y/L, a permanent
-    offset after unloading within 5 % of L·sin(θ_max − θ_y), and yield again at M_y."""
-    figures = _push(material)
+    offset after unloading within 5 % of L·sin(θ_max − θ_y), and yield again at M_y, at
+    the paper's 200 µm and at the 50 and 20 µm grades' physics steps."""
+    spec = CircularSocket(2, 1, hole_radius=0.3 + clearance)
+    assert compile_model(spec, 1).opt.timestep == timestep
+    figures = _push(material, clearance)
     assert figures["slope"] == pytest.approx(1.0, abs=0.05)
     assert figures["first_yield"] == pytest.approx(1.0, abs=0.05)
     assert figures["residual_mm"] > 0.05  # it stays bent
@@ -165,6 +172,32 @@ def test_a_bend_stays_and_keep_part_carries_it_to_the_next_episode() -> None:
     assert not fresh["pin_bend"].any() and fresh["damaged"] is False
 
 
+def test_the_delicate_reward_ends_the_episode_with_its_penalty_on_damage() -> None:
+    """With ``damage_penalty`` the step that damages a pin gets the penalty and terminates
+    the episode; without it the same step goes on, unrewarded (the same physics)."""
+    penalised = InsertionEnv(
+        CircularSocket(2, 1), pin_material="alloy42", damage_penalty=5.0, **ELASTIC
+    )
+    plain = InsertionEnv(CircularSocket(2, 1), pin_material="alloy42", **ELASTIC)
+    outcomes = []
+    for env in (penalised, plain):
+        env.reset(seed=0, options={"pose": [0.0, 0.0, 0.0, -0.6]})
+        steps = []
+        for _ in range(3):
+            *_, reward, terminated, truncated, info = env.step([1.0, 0.0, 0.0, 0.0])
+            steps.append((reward, terminated, info))
+            if terminated:
+                break
+        outcomes.append(steps)
+    (reward, terminated, info), plain_steps = outcomes[0][-1], outcomes[1]
+    assert terminated and info["damaged"] and not info["success"]
+    assert info["reward_damage"] == -5.0 and info["damaged_at"] == len(outcomes[0])
+    plain_reward, plain_terminated, plain_info = plain_steps[len(outcomes[0]) - 1]
+    assert plain_info["damaged"] and not plain_terminated and "reward_damage" not in plain_info
+    assert reward == plain_reward - 5.0
+    assert all(step[2]["reward_damage"] == 0.0 for step in outcomes[0][:-1])
+
+
 def test_dm_control_steps_as_the_gym_id() -> None:
     pose = [0.3, -0.1, 0.02, 0.6]  # outside the clearance: pushes, slides, collides
     gym_env = gym.make("tolins/Circle2x2Delicate-v2", measurement_noise=0).unwrapped
@@ -223,6 +256,18 @@ def test_dm_control_steps_as_the_gym_id() -> None:
             r"damage_threshold=0.05 applies to bending pins only",
         ),
         (
+            lambda: InsertionEnv(CircularSocket(2, 2), damage_penalty=1.0),
+            r"damage_penalty=1.0 applies to bending pins only",
+        ),
+        (
+            lambda: InsertionEnv(CircularSocket(2, 2), damage_penalty=-1.0, **ELASTIC),
+            r"damage_penalty=-1.0 is out of range; allowed: 0 < damage_penalty ≤ 1000",
+        ),
+        (
+            lambda: InsertionEnv(CircularSocket(2, 2), damage_penalty="big", **ELASTIC),
+            r"damage_penalty='big'.*allowed: 0 < damage_penalty",
+        ),
+        (
             lambda: InsertionEnv(PolygonSocket(4, 1.5, 1.65), **ELASTIC),
             r"round pins .* a solid 2.12132 mm peg.* bends 1\.0 µm under the servos' 5 N "
             r"and yields only at 120\.7 N",
@@ -249,3 +294,32 @@ def test_bad_settings_are_refused_in_one_line(make, match: str) -> None:
     with pytest.raises(ValueError, match=match) as raised:
         make()
     assert "\n" not in str(raised.value)
+
+
+def test_the_vector_env_steps_each_simulation_as_the_single_env_does() -> None:
+    """Three simulations on two threads, pressing and dragging from just over the board,
+    then a reset keeping the parts' bends: observations, rewards and bends bit for bit the
+    single env's."""
+    kwargs = {"pin_material": "alloy42", "measurement_noise": 0.0}
+    env_id = "tolins/Circle2x1Delicate-v2"
+    vector = tolins.make_vec(env_id, 3, num_threads=2, **kwargs)
+    single = gym.make(env_id, **kwargs).unwrapped
+    pose = [0.0, 0.0, 0.0, -0.6]  # pins in their holes, short of success
+    actions = np.array([[1.0, 0.0, 0.0, 0.0], [-1.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.05, 0.0]])
+    vector.reset(seed=[5, 6, 7], options={"pose": pose})
+    batch = [vector.step(actions) for _ in range(3)]
+    kept = vector.reset(seed=[8, 9, 10], options={"pose": [0.0, 0.0, 0.0, 2.0], "keep_part": True})
+    for i in range(3):
+        single.reset(seed=5 + i, options={"pose": pose})
+        for k in range(3):
+            observation, reward, *_, info = single.step(actions[i])
+            np.testing.assert_array_equal(observation, batch[k][0][i])
+            assert reward == batch[k][1][i]
+            np.testing.assert_array_equal(info["pin_bend"], batch[k][4]["pin_bend"][i])
+        observation, info = single.reset(
+            seed=8 + i, options={"pose": [0.0, 0.0, 0.0, 2.0], "keep_part": True}
+        )
+        np.testing.assert_array_equal(observation, kept[0][i])
+        np.testing.assert_array_equal(info["pin_bend"], kept[1]["pin_bend"][i])
+    assert np.abs(kept[1]["pin_bend"]).max() > 0.02  # the first simulation's pins stayed bent
+    vector.close()

@@ -196,7 +196,7 @@ class Insert(control.Task):
         return self.last_score.reward
 
     def get_termination(self, physics: InsertionPhysics) -> float | None:
-        if self.last_score.success:
+        if self.last_score.terminated:
             return 0.0
         if self.last_score.truncated:
             return 1.0

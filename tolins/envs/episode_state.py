@@ -233,9 +233,10 @@ class EpisodeState:
         if state.error is not None:
             return self.score.fault()
         self.state = state
-        score = self.score.score(state, self.socket)
         bend = state.pin_bend
-        if self.damaged_at is None and bend is not None and is_damaged(self.settings, bend):
+        damaged = self.damaged_at is None and bend is not None and is_damaged(self.settings, bend)
+        score = self.score.score(state, self.socket, damaged)
+        if damaged:
             self.damaged_at = self.score.steps
         self.observation = self._observe(state, rng)
         return score
@@ -250,7 +251,7 @@ class EpisodeState:
             info["error"] = state.error
         else:
             info = self.info(score, score.success)  # the score's success is the state's
-        return self.observation.copy(), score.reward, score.success, score.truncated, info
+        return self.observation.copy(), score.reward, score.terminated, score.truncated, info
 
     def info(self, score: StepScore, success: bool | None = None) -> dict[str, Any]:
         """The ``info`` dict after a reset (``NO_SCORE``) or a step scored ``score``

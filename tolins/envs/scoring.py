@@ -29,18 +29,38 @@ class StepScore:
     truncated: bool
     #: The dense modes' terms (:mod:`tolins.envs.reward`); ``None`` in the sparse mode.
     terms: RewardTerms | None = None
+    #: The ``delicate`` reward's term (``-damage_penalty`` on the step a pin became
+    #: damaged, else 0), or ``None`` without a ``damage_penalty``.
+    reward_damage: float | None = None
+
+    @property
+    def damage_ended(self) -> bool:
+        """Whether the step ended the episode because a pin became damaged."""
+        return bool(self.reward_damage)
+
+    @property
+    def terminated(self) -> bool:
+        """The episode reached a terminal state: success, or a damaged part."""
+        return self.success or self.damage_ended
 
     @property
     def reward(self) -> float:
+        reward = self.reward_success + self.reward_collision
         if self.terms is not None:
-            return self.terms.total
-        return self.reward_success + self.reward_collision
+            reward = self.terms.total
+        if self.reward_damage is not None:
+            reward += self.reward_damage
+        return reward
 
     def reward_info(self) -> dict[str, float]:
         """Every term of the reward as ``info`` keys ``reward_*`` (they sum to ``reward``)."""
         if self.terms is not None:
-            return self.terms.to_info()
-        return RewardTerms(self.reward_success, self.reward_collision).to_info()
+            info = self.terms.to_info()
+        else:
+            info = RewardTerms(self.reward_success, self.reward_collision).to_info()
+        if self.reward_damage is not None:
+            info["reward_damage"] = self.reward_damage
+        return info
 
 
 #: The score before any step (after a reset).
@@ -74,9 +94,12 @@ class EpisodeScore:
                 "before stepping again"
             )
 
-    def score(self, state: BackendState, socket: SocketSpec | None = None) -> StepScore:
+    def score(
+        self, state: BackendState, socket: SocketSpec | None = None, damaged: bool = False
+    ) -> StepScore:
         """Score the step that produced ``state`` (a valid state, not a fault); ``socket``:
-        the episode's workpiece (default the nominal one)."""
+        the episode's workpiece (default the nominal one); ``damaged``: a pin became damaged
+        in it (the ``delicate`` reward's penalty, with a ``damage_penalty``)."""
         self.check_running()
         self.steps += 1
         collision = state.peak_force > self.settings.collision_force
@@ -96,8 +119,11 @@ class EpisodeScore:
                 state.pose,
                 self.settings.success_depth,
             )
-        truncated = not success and self.steps >= self.settings.horizon
-        self.over = success or truncated
+        penalty = self.settings.damage_penalty
+        reward_damage = None if penalty is None else (-penalty if damaged else 0.0)
+        ended = success or bool(reward_damage)
+        truncated = not ended and self.steps >= self.settings.horizon
+        self.over = ended or truncated
         return StepScore(
             success=success,
             collision=collision,
@@ -105,6 +131,7 @@ class EpisodeScore:
             reward_collision=reward_collision,
             truncated=truncated,
             terms=terms,
+            reward_damage=reward_damage,
         )
 
     def fault(self) -> StepScore:

@@ -98,6 +98,10 @@ class TaskSettings:
         damage_threshold: With elastic-plastic pins, the permanent tip offset (mm) from which
             a pin counts as damaged (``info["damaged"]``), in ``(0, clearance]``; default half
             the socket's radial clearance.
+        damage_penalty: With elastic-plastic pins, the penalty of the ``delicate`` reward: the
+            step on which a pin becomes damaged gets ``-damage_penalty`` (``info
+            ["reward_damage"]``) and ends the episode (terminated); ``None`` (the default):
+            damage is reported, not rewarded, and the episode goes on.
         version: Not a keyword: the :class:`~tolins.physics.versions.PhysicsVersion` of
             ``physics_version``, looked up once here; what the envs hand their simulators.
     """
@@ -120,6 +124,7 @@ class TaskSettings:
     pins: str = "rigid"
     pin_material: Any = None
     damage_threshold: float | None = None
+    damage_penalty: float | None = None
     version: PhysicsVersion = field(init=False, repr=False)
     elastic: ElasticPins | None = field(init=False, repr=False)
 
@@ -172,11 +177,14 @@ class TaskSettings:
         if self.robot == "panda" and self.randomization is not None:
             check_gain_range(self.version, self.randomization.servo_gain)
         set_(self, "grasp_error", check_grasp_error(self.grasp_error, self.robot))
-        elastic = check_pins(self.socket, self.pins, self.pin_material, self.damage_threshold)
+        elastic = check_pins(
+            self.socket, self.pins, self.pin_material, self.damage_threshold, self.damage_penalty
+        )
         set_(self, "elastic", elastic)
         if elastic is not None:
             set_(self, "pin_material", elastic.material)
             set_(self, "damage_threshold", elastic.damage_threshold)
+            set_(self, "damage_penalty", elastic.damage_penalty)
         if self.randomization is not None and self.randomization.pose_spread is not None:
             widest = spread_pose(self.initial_pose, self.randomization.pose_spread[1])
             try:

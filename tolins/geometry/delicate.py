@@ -27,6 +27,8 @@ PIN_MODELS = ("rigid", "elastic-plastic")
 DEFAULT_MATERIAL = "phosphor_bronze"
 #: The servos' force limit (N): what a policy can push a pin with.
 SERVO_FORCE = 5.0
+#: The largest ``damage_penalty`` (the paper's success reward is 100).
+MAX_DAMAGE_PENALTY = 1000.0
 
 
 @dataclass(frozen=True)
@@ -36,10 +38,13 @@ class ElasticPins:
     Attributes:
         material: The pins' material.
         damage_threshold: Permanent tip offset (mm) from which a pin counts as damaged.
+        damage_penalty: The reward given on the step a pin becomes damaged, which then
+            ends the episode, or ``None``: damage is only reported (the default).
     """
 
     material: mt.PinMaterial
     damage_threshold: float
+    damage_penalty: float | None = None
 
 
 @dataclass(frozen=True)
@@ -100,15 +105,24 @@ def peg_refusal(spec: SocketSpec) -> str:
 
 
 def check_pins(
-    socket: SocketSpec, pins: object, material: object, damage_threshold: object
+    socket: SocketSpec,
+    pins: object,
+    material: object,
+    damage_threshold: object,
+    damage_penalty: object = None,
 ) -> ElasticPins | None:
-    """The elastic-plastic pins of the settings ``pins``, ``pin_material`` and
-    ``damage_threshold``, or ``None`` for rigid pins; one-line ``ValueError`` naming the
-    setting and what is allowed otherwise."""
+    """The elastic-plastic pins of the settings ``pins``, ``pin_material``,
+    ``damage_threshold`` and ``damage_penalty``, or ``None`` for rigid pins; one-line
+    ``ValueError`` naming the setting and what is allowed otherwise."""
     if not isinstance(pins, str) or pins not in PIN_MODELS:
         raise ValueError(f"pins={pins!r}; allowed: {', '.join(map(repr, PIN_MODELS))}")
     if pins == "rigid":
-        for name, value in (("pin_material", material), ("damage_threshold", damage_threshold)):
+        given = (
+            ("pin_material", material),
+            ("damage_threshold", damage_threshold),
+            ("damage_penalty", damage_penalty),
+        )
+        for name, value in given:
             if value is not None:
                 raise ValueError(
                     f"{name}={value!r} applies to bending pins only; allowed: "
@@ -130,4 +144,12 @@ def check_pins(
             raise ValueError(
                 f"damage_threshold={damage_threshold!r} is out of range; allowed: {allowed}"
             )
-    return ElasticPins(resolved, threshold)
+    penalty = None
+    if damage_penalty is not None:
+        allowed = f"0 < damage_penalty ≤ {MAX_DAMAGE_PENALTY:g} (a reward of -damage_penalty)"
+        penalty = check_real("damage_penalty", damage_penalty, allowed)
+        if not 0.0 < penalty <= MAX_DAMAGE_PENALTY:
+            raise ValueError(
+                f"damage_penalty={damage_penalty!r} is out of range; allowed: {allowed}"
+            )
+    return ElasticPins(resolved, threshold, penalty)

@@ -184,7 +184,7 @@ def test_the_delicate_reward_ends_the_episode_with_its_penalty_on_damage() -> No
         env.reset(seed=0, options={"pose": [0.0, 0.0, 0.0, -0.6]})
         steps = []
         for _ in range(3):
-            *_, reward, terminated, truncated, info = env.step([1.0, 0.0, 0.0, 0.0])
+            _, reward, terminated, _, info = env.step([1.0, 0.0, 0.0, 0.0])
             steps.append((reward, terminated, info))
             if terminated:
                 break

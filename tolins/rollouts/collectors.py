@@ -62,13 +62,16 @@ class Outcome:
     def result(self) -> dict[str, Any]:
         info = self._last
         error = info.get("error")
-        return {
+        result = {
             "reward": float(self._total),
             "success": bool(info["success"]),
             "steps": int(info["step"]),
             "collisions": int(info["n_collisions"]),
             "error": None if error is None else str(error),
         }
+        if "damaged" in info:  # pins that bend (docs/delicate.md)
+            result["damaged"] = bool(info["damaged"])
+        return result
 
 
 class Forces:

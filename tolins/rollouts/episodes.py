@@ -27,8 +27,10 @@ from tolins.stopping import raise_if_stopped
 Policy = Callable[[np.ndarray], np.ndarray]
 
 #: The fields an episode's JSON form holds: its figures and force-aware scores (the arrays
-#: of pairs and poses stay in memory).
+#: of pairs and poses stay in memory), and ``damaged`` where the pins can bend.
 JSON_FIELDS = ("reward", "success", "steps", "collisions", "error", "forces", "profile")
+#: The JSON fields written only when they are not ``None``.
+OPTIONAL_JSON_FIELDS = ("damaged",)
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,7 +43,9 @@ class Episode:
     (:mod:`tolins.rollouts.forces`; both ``None`` in a record written before the scores
     existed). ``observations`` ``(T, 8)`` and ``actions`` ``(T, 4)`` are its pairs
     (:class:`~tolins.rollouts.collectors.Pairs`), ``poses`` ``(T + 1, 4)`` its true poses
-    (:class:`~tolins.rollouts.collectors.Poses`); ``None`` unless collected. Two records
+    (:class:`~tolins.rollouts.collectors.Poses`); ``None`` unless collected. ``damaged``:
+    whether a pin was bent beyond the env's ``damage_threshold`` by the episode's end
+    (``info["damaged"]``, docs/delicate.md), ``None`` where the pins are rigid. Two records
     are equal when every field is, arrays element for element.
     """
 
@@ -55,6 +59,7 @@ class Episode:
     observations: np.ndarray | None = None
     actions: np.ndarray | None = None
     poses: np.ndarray | None = None
+    damaged: bool | None = None
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Episode):
@@ -71,7 +76,8 @@ def _same(a: Any, b: Any) -> bool:
 def episode_to_dict(episode: Episode) -> dict[str, Any]:
     """``episode``'s JSON form: the :data:`JSON_FIELDS`, the scores as a dict."""
     row = asdict(replace(episode, observations=None, actions=None, poses=None))
-    return {name: row[name] for name in JSON_FIELDS}
+    optional = {name: row[name] for name in OPTIONAL_JSON_FIELDS if row[name] is not None}
+    return {**{name: row[name] for name in JSON_FIELDS}, **optional}
 
 
 def episode_from_dict(row: dict) -> Episode:

@@ -34,6 +34,8 @@ class BenchConfig:
         robustness: Run the robustness table (:mod:`tolins.bench.table.robustness`).
         robot: Run the Panda's table (:mod:`tolins.bench.table.robot`; MuJoCo only, needs
             ``tolins[robot]``).
+        delicate: Run the delicate-pins table (:mod:`tolins.bench.table.delicate`; MuJoCo
+            only).
         workers: Threads evaluating rows side by side (results do not depend on it).
         executor: ``local`` (this process) or ``ray`` (Ray tasks; ``tolins[ray]``): where
             the stages run (:mod:`tolins.bench.pipeline.executor`; results do not depend on it).
@@ -49,6 +51,7 @@ class BenchConfig:
     study: bool = True
     robustness: bool = True
     robot: bool = True
+    delicate: bool = True
     workers: int = 2
     executor: str = "local"
     address: str | None = None
@@ -95,3 +98,6 @@ class BenchRun:
     """``results.json["robustness"]`` (:func:`tolins.bench.jobs.robustness.robustness_results`)."""
     robot: dict[str, Any] | None = None
     """``results.json["robot"]``: the Panda's table (:mod:`tolins.bench.table.robot`)."""
+    delicate: dict[str, Any] | None = None
+    """``results.json["delicate"]``: the delicate-pins table, its claim and gentlest learned
+    policy (:mod:`tolins.bench.table.delicate`)."""

@@ -42,13 +42,20 @@ from tolins.bench.jobs.trajectories import POINTS as TRAJECTORY_EPISODES
 from tolins.bench.pipeline import settings
 from tolins.bench.pipeline.executor import chain_costs
 from tolins.bench.pipeline.profiles import Profile
+from tolins.bench.table.delicate import DELICATE
 from tolins.bench.table.robot import ROBOT
 from tolins.bench.table.robustness import ROBUSTNESS, ConditionTable
 from tolins.bench.table.rows import ALL_ROWS, SB3_METHODS, TRAININGS, unseeded
 from tolins.paper import HORIZON
 
 #: The kinds of stages, in the order a run meets them.
-KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "study")
+KINDS = ("demonstrations", "training", "evaluation", "robustness", "robot", "delicate", "study")
+#: The kinds of stage that evaluate a table's policies under its conditions, and the table.
+TABLES: dict[str, ConditionTable] = {
+    "robustness": ROBUSTNESS,
+    "robot": ROBOT,
+    "delicate": DELICATE,
+}
 #: Seconds per budgeted env step (per BC sample and epoch, per study workpiece) of each
 #: kind of work on the MuJoCo backend's ``-v2`` physics, two stages side by side on 2
 #: cores: the quick bench of an idle fresh clone (2026-12-04, 7.7 min; benchmarks/README.md,
@@ -105,6 +112,8 @@ def stage_kind(name: str) -> str:
         return "robustness"
     if name.startswith(ROBOT.prefix):
         return "robot"
+    if name.startswith(DELICATE.prefix):
+        return "delicate"
     return "study" if name == study.NAME else "training"
 
 
@@ -133,10 +142,10 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
     factor = INFERENCE_FACTOR if _with_inference(name, kind) else 1.0
     if kind == "evaluation":
         return profile.eval_episodes * HORIZON * factor, "eval-rollout"
-    if kind in ("robustness", "robot"):
-        table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
+    if kind in TABLES:
+        table = TABLES[kind]
         episodes = profile.robustness_episodes * len(table.conditions)
-        unit = "robust-rollout" if kind == "robustness" else "panda-rollout"
+        unit = "panda-rollout" if kind == "robot" else "robust-rollout"
         return episodes * HORIZON * factor, unit
     training = TRAININGS.get(base)
     if training is None:
@@ -315,8 +324,8 @@ def _with_inference(name: str, kind: str) -> bool:
     if kind == "evaluation":
         rows = (row for row in ALL_ROWS if unseeded(row_evaluation.stage_name(row, 0)) == base)
         return any(row.inference for row in rows)
-    if kind in ("robustness", "robot"):
-        table: ConditionTable = ROBUSTNESS if kind == "robustness" else ROBOT
+    if kind in TABLES:
+        table = TABLES[kind]
         names = ((p, unseeded(robustness.stage_name(p, 0, table))) for p in table.policies)
         return any(policy.inference for policy, stage in names if stage == base)
     return False

@@ -42,6 +42,7 @@ from tolins.bench.reports.writer import write_reports
 from tolins.bench.store.cache import StageCache
 from tolins.bench.store.integrity import StageFileError, read_json
 from tolins.bench.table.claims import check_claims
+from tolins.bench.table.delicate import DELICATE, with_verdicts
 from tolins.bench.table.results import row_entry
 from tolins.bench.table.robot import ROBOT, with_grasp_column
 from tolins.bench.table.rows import select_rows
@@ -105,6 +106,8 @@ def _plan_stages(
     if config.robot and backend == "mujoco":
         require_panda("tolins bench (its Panda table; --no-robot leaves it out)")
         plan_robustness(plan, seeds, profile, backend, ROBOT)
+    if config.delicate and backend == "mujoco":
+        plan_robustness(plan, seeds, profile, backend, DELICATE)
     if config.study:
         plan_study(plan, profile, backend, 2 if local else 1, inner_bars)
     plan_trajectories(plan, backend)
@@ -177,6 +180,10 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         count = profile.robustness_episodes
         run.robot = robustness_results(run.stage_folders, count, seeds, ROBOT)
         run.robustness = with_grasp_column(run.robustness, run.robot)
+    if config.delicate and backend == "mujoco":
+        count = profile.robustness_episodes
+        table = robustness_results(run.stage_folders, count, seeds, DELICATE)
+        run.delicate = with_verdicts(table)
     run.wall_s = time.perf_counter() - began
     write_reports(run, seeds)
     write_timeline(out, run)
@@ -200,7 +207,7 @@ def _log_done(
     stages.finish(job.name, wall_s)
     if job.name.startswith("demos-"):
         log(f"{job.name}: {plan.stages[job.name].spec.episodes} episodes written ({wall_s:.0f} s)")
-    elif job.name.startswith((PREFIX, ROBOT.prefix)):
+    elif job.name.startswith((PREFIX, ROBOT.prefix, DELICATE.prefix)):
         log(f"{job.name}: evaluated ({wall_s:.0f} s)")
     elif job.name in plan.trainings:
         log(f"{job.name}: trained ({wall_s:.0f} s)")

@@ -26,7 +26,7 @@ def stage_kind(name: str) -> str:
     progress bar's kinds (:func:`~tolins.bench.pipeline.progress.stage_kind`), the
     robustness and robot stages drawn as the evaluations they are."""
     kind = progress_kind(name)
-    return "evaluation" if kind in ("robustness", "robot") else kind
+    return "evaluation" if kind in ("robustness", "robot", "delicate") else kind
 
 
 def worker_label(entry: dict[str, Any]) -> str:

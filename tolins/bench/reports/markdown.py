@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from tolins.bench.machine import describe_machine
 from tolins.bench.reference import PREFIX, reference_path
+from tolins.bench.reports.delicate import format_delicate_section
 from tolins.bench.reports.robustness import format_robot_section, format_section
 from tolins.bench.table.baselines import CurveSummary, summarise_curves
 from tolins.bench.table.claims import CEILING, SMALLEST_EFFECT, ClaimCheck
@@ -229,6 +230,7 @@ def format_markdown(
         parts += ["![inference study](inference_study.png)"]
     parts += format_section(run.robustness)
     parts += format_robot_section(run.robot)
+    parts += format_delicate_section(run.delicate)
     if other is not None:
         parts += [
             "",

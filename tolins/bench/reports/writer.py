@@ -17,6 +17,7 @@ from tolins.bench.reports.markdown import format_markdown, stage_minutes
 from tolins.bench.reports.robustness import plot_robustness
 from tolins.bench.store.integrity import read_stage_curves, stage_file
 from tolins.bench.table.baselines import curves_json, env_step_curves
+from tolins.bench.table.delicate import KEY as DELICATE_KEY
 from tolins.bench.table.results import read_results, results_document
 from tolins.bench.table.robot import KEY as ROBOT_KEY
 from tolins.bench.table.robustness import KEY
@@ -39,6 +40,8 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
         document[KEY] = run.robustness
     if run.robot is not None:
         document[ROBOT_KEY] = run.robot
+    if run.delicate is not None:
+        document[DELICATE_KEY] = run.delicate
     written = [
         atomic_json(out / "results.json", document),
         atomic_json(out / f"results.{backend}.json", document),

@@ -183,10 +183,14 @@ def _forces_problem(forces: Any, steps: Any) -> str | None:
 
 def _episode_problem(row: Any) -> str | None:
     fields = {"reward", "success", "steps", "collisions", "error"}
-    optional = {"forces", "profile"}  # absent from episodes recorded without force scores
+    # forces and profile are absent from episodes recorded without force scores, damaged
+    # from those of rigid pins
+    optional = {"forces", "profile", "damaged"}
     if not isinstance(row, dict) or set(row) - optional != fields:
         keys = sorted(row) if isinstance(row, dict) else type(row).__name__
-        return f"fields {keys}; allowed: {sorted(fields)}, forces and profile"
+        return f"fields {keys}; allowed: {sorted(fields)}, forces, profile and damaged"
+    if "damaged" in row and not isinstance(row["damaged"], bool):
+        return f"damaged {row['damaged']!r}; allowed: true or false"
     if row.get("forces") is not None:
         problem = _forces_problem(row["forces"], row["steps"])
         if problem:

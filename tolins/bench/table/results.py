@@ -13,7 +13,7 @@ import numpy as np
 
 from tolins.bench.table.rows import Row
 from tolins.bench.table.seeds import FIRST_SEED
-from tolins.bench.table.statistics import row_intervals
+from tolins.bench.table.statistics import mean_intervals, row_intervals
 from tolins.json_input import read_json_file, shorten
 from tolins.rollouts.episodes import Episode
 from tolins.rollouts.forces import FORCE_FIGURES
@@ -75,6 +75,37 @@ def row_entry(row: Row, per_seed: list[list[Episode]]) -> dict[str, Any]:
     entry["reward_per_episode"] = [[float(r) for r in seed] for seed in values["reward"]]
     entry.update(row_intervals(values))
     entry.update(force_figures(per_seed))
+    entry.update(damage_figures(per_seed))
+    return entry
+
+
+#: The figures of episodes whose pins bend (docs/delicate.md).
+DAMAGE_FIGURES = ("damage", "success_undamaged")
+
+
+def damage_figures(per_seed: list[list[Episode]]) -> dict[str, Any]:
+    """Where every episode's pins could bend (``Episode.damaged``): the share of episodes
+    that damaged the part (``damage``) and that succeeded without damaging it
+    (``success_undamaged``), each with its ``_mean``, ``_std`` and ``_per_seed`` (as
+    :func:`row_entry`'s) and ``_ci``; empty otherwise (rigid pins)."""
+    if any(e.damaged is None for seed in per_seed for e in seed):
+        return {}
+    values = {
+        "damage": [[float(e.damaged) for e in seed] for seed in per_seed],
+        "success_undamaged": [
+            [float(e.success and not e.damaged) for e in seed] for seed in per_seed
+        ],
+    }
+    over_seeds = len(per_seed) > 1
+    entry: dict[str, Any] = {}
+    for name in DAMAGE_FIGURES:
+        flat = np.concatenate([np.asarray(v) for v in values[name]])
+        spread = [np.mean(v) for v in values[name]] if over_seeds else flat
+        entry[f"{name}_mean"] = float(flat.mean())
+        entry[f"{name}_std"] = float(np.std(spread))
+        entry[f"{name}_per_seed"] = [float(np.mean(v)) for v in values[name]]
+        entry[f"{name}_per_episode"] = values[name]
+    entry.update(mean_intervals(values))
     return entry
 
 

@@ -184,6 +184,22 @@ def row_intervals(values: dict[str, list[list[float]]]) -> dict[str, Any]:
     return entry
 
 
+def mean_intervals(values: dict[str, list[list[float]]]) -> dict[str, list[float]]:
+    """``{figure}_ci``: the 95 % CI of each figure's mean from its episodes' ``values``
+    (figure → one list of episode values per training seed), over the per-seed means with
+    ≥ 2 seeds, else over the one seed's episodes (as :func:`row_intervals`)."""
+    names = list(values)
+    seeds = values[names[0]]
+    if len(seeds) > 1:
+        columns = [[float(np.mean(s)) for s in values[name]] for name in names]
+    else:
+        columns = [list(values[name][0]) for name in names]
+    _, interval = _estimate(np.asarray(columns, dtype=float).T, lambda x: x.mean(axis=0))
+    return {
+        f"{name}_ci": [float(interval[0, i]), float(interval[1, i])] for i, name in enumerate(names)
+    }
+
+
 def difference(
     x: Sequence[float], y: Sequence[float], over: str, *, paired: bool = False
 ) -> Interval:

@@ -1,0 +1,104 @@
+"""The delicate-pins table of ``tolins bench`` (beyond the paper): the 2*2's policies on
+the same workpiece with pins that bend and stay bent (docs/delicate.md).
+
+The lines are the Panda table's (:data:`~tolins.bench.table.robot.ROBOT_POLICIES`: the
+experts, π_bc, π_n, π_φ and π_φ*, trained on rigid pins); the columns
+(:data:`CONDITIONS`) the paper's 2*2 at 200 µm and its 50 µm grade with
+``pins="elastic-plastic"`` (phosphor bronze, a pin damaged beyond half the radial
+clearance). Its cells are the robustness table's
+(:func:`~tolins.bench.table.robustness.robustness_table`) with the damage figures of
+:func:`~tolins.bench.table.results.damage_figures` (the share of damaged parts and of
+successes without damage, 95 % CIs over training seeds); its stages
+``delicate-{policy}-seed{s}`` (:mod:`tolins.bench.jobs.robustness`); its key in
+``results.json`` ``delicate``, which also holds the claim :func:`damage_claim` checks and
+the gentlest learned policy (:func:`gentlest`). MuJoCo only: the kinematic simulator's
+pins cannot bend.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from tolins.bench.table.claims import HELD, INCONCLUSIVE, NO_DIFFERENCE, NOT_HELD
+from tolins.bench.table.robot import ROBOT_POLICIES
+from tolins.bench.table.robustness import Condition, ConditionTable
+from tolins.bench.table.rows import bench_id
+from tolins.bench.table.statistics import EPISODES, SEEDS, difference, equivalent, sign
+from tolins.geometry.specs import GRADES_UM
+
+#: ``results.json``'s key of the table.
+KEY = "delicate"
+#: The columns: the paper's 2*2 and its 50 µm grade, with pins that bend.
+CONDITIONS: tuple[Condition, ...] = (
+    Condition("delicate", "2*2", "delicate", bench_id("Circle2x2Delicate"), GRADES_UM[0]),
+    Condition("delicate_fit50", "2*2 at 50 µm", "delicate", bench_id("Circle2x2Fit50Delicate"), 50),
+)
+#: The table.
+DELICATE = ConditionTable(KEY, "delicate-", ROBOT_POLICIES, CONDITIONS)
+#: The claim the table checks, in the words of results.md.
+CLAIM = "the safe expert damages fewer parts than the efficient one"
+#: The smallest difference of damage rate that matters (a share of episodes), written
+#: down before the run: one part in twenty.
+DAMAGE_DELTA = 0.05
+
+
+def damage_claim(table: dict[str, Any], condition: str = "delicate") -> dict[str, Any]:
+    """The verdict on :data:`CLAIM` on ``condition``'s column of ``table``
+    (``results.json["delicate"]``): the efficient expert's damage rate minus the safe
+    one's, with its 95 % CI, paired over training seeds (each evaluates both experts from
+    the same initial poses) or over the one seed's episodes; *held* when the CI lies above
+    0, *did not hold* below, *no practical difference* inside ± :data:`DAMAGE_DELTA`,
+    else *inconclusive*, as is a difference of one sample (the four-valued verdicts of
+    :mod:`tolins.bench.table.claims`; the experts are not trained, so one seed needs no
+    training margin)."""
+    cells = table["cells"]
+    if "safe" not in cells or "efficient" not in cells:
+        return {"claim": CLAIM, "verdict": "not evaluated", "condition": condition}
+    safe, efficient = cells["safe"][condition], cells["efficient"][condition]
+    if len(safe["damage_per_seed"]) > 1:
+        x, y, over = efficient["damage_per_seed"], safe["damage_per_seed"], SEEDS
+    else:
+        x, y, over = efficient["damage_per_episode"][0], safe["damage_per_episode"][0], EPISODES
+    interval = difference(x, y, over, paired=True)
+    verdict = {1: HELD, -1: NOT_HELD}.get(sign(interval))
+    if verdict is None:
+        verdict = NO_DIFFERENCE if equivalent(interval, DAMAGE_DELTA) else INCONCLUSIVE
+    if interval.n < 2:  # one sample's bootstrap interval has no width: it decides nothing
+        verdict = INCONCLUSIVE
+    return {
+        "claim": CLAIM,
+        "condition": condition,
+        "verdict": verdict,
+        "difference": interval.to_json(),
+        "delta": DAMAGE_DELTA,
+    }
+
+
+def gentlest(table: dict[str, Any], condition: str = "delicate") -> dict[str, Any] | None:
+    """The learned policy of ``table`` that damaged the fewest parts on ``condition``
+    (ties: the one with more successes without damage, then the table's order), with its
+    damage rate; ``None`` when no learned policy ran."""
+    learned = [p for p in table["policies"] if p["agent"] not in ("safe", "efficient")]
+    if not learned:
+        return None
+
+    def rank(policy: dict[str, Any]) -> tuple[float, float]:
+        cell = table["cells"][policy["id"]][condition]
+        return cell["damage_mean"], -cell["success_undamaged_mean"]
+
+    best = min(learned, key=rank)
+    cell = table["cells"][best["id"]][condition]
+    return {
+        "policy": best["id"],
+        "label": best["label"],
+        "damage_mean": cell["damage_mean"],
+        "success_undamaged_mean": cell["success_undamaged_mean"],
+    }
+
+
+def with_verdicts(table: dict[str, Any] | None) -> dict[str, Any] | None:
+    """``table`` with its ``claim`` (:func:`damage_claim`) and ``gentlest``
+    (:func:`gentlest`) on the paper's 2*2 (``None`` stays ``None``)."""
+    if table is None:
+        return None
+    return {**table, "claim": damage_claim(table), "gentlest": gentlest(table)}

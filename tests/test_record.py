@@ -388,3 +388,39 @@ def test_nothing_in_tolins_imports_record() -> None:
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.stdout.strip() == "False", result.stderr
+
+
+def test_pins_that_bend_are_drawn_bent_step_by_step_with_their_yield(tmp_path: Path) -> None:
+    """Pins that bend: each step's pins as strips from root to the tip offset the env gave
+    (a yielded pin in its own colour), an event where a pin yielded and where the part was
+    damaged, and no straight static pins."""
+    path = tmp_path / "delicate.rrd"
+    socket = tolins.CircularSocket(2, 1)
+    env = RerunRecorder(
+        gym.make("tolins/Insert-v2", socket=socket, pins="elastic-plastic", pin_material="alloy42"),
+        path,
+        policy_name="push",
+    )
+    _, info = env.reset(seed=0, options={"pose": [0.0, 0.0, 0.0, -0.6]})
+    infos = [info]
+    for _ in range(3):  # pins in their holes dragged into the walls: they yield
+        infos.append(env.step([1.0, 0.0, 0.0, 0.0])[-1])
+    env.close()
+    assert infos[-1]["damaged"]
+    tables = read_tables(path)
+    assert "/world/episode_000/workpiece/pins#static" not in tables
+    pins = tables["/world/episode_000/workpiece/pins#temporal"]
+    assert pins["step"] == [0, 1, 2, 3]
+    for row, info in zip(pins["LineStrips3D:strips"], infos, strict=True):
+        strips = np.array(row)  # (pins, 2 points, xyz), float32 as rerun keeps them
+        np.testing.assert_allclose(strips[:, 0, :2], socket.pin_centers, atol=1e-6)
+        offsets = strips[:, 1, :2] - strips[:, 0, :2]
+        np.testing.assert_allclose(offsets, info["pin_deflection"], atol=1e-6)
+        lengths = np.linalg.norm(strips[:, 1] - strips[:, 0], axis=1)
+        np.testing.assert_allclose(lengths, PIN_LENGTH, rtol=1e-6)
+    colors = pins["LineStrips3D:colors"]
+    assert colors[0][0] != colors[-1][0]  # straight, then bent for good
+    events = tables["/events/episode_000#temporal"]["TextLog:text"]
+    texts = [text[0] for text in events]
+    assert any(text.startswith("yielded: permanent tip offsets pin 0") for text in texts)
+    assert any(text.startswith("part damaged") for text in texts)

@@ -13,6 +13,7 @@ import rerun as rr
 
 from tolins.geometry.specs import SocketSpec
 from tolins.record.arm import ArmDrawing, log_arm, log_handle
+from tolins.record.geometry import pin_geometry
 from tolins.record.layout import (
     FORCE_SCALE,
     SIM_TIME,
@@ -27,7 +28,7 @@ from tolins.record.layout import (
     wrist_force_path,
 )
 from tolins.record.metadata import spec_to_dict
-from tolins.record.scene import log_workpiece
+from tolins.record.scene import BENT_COLOR, PIN_COLOR, bent_pin_strips, log_workpiece
 
 
 @lru_cache(maxsize=64)
@@ -63,6 +64,10 @@ class EpisodeBuffer:
     arm_poses: list[np.ndarray] = field(default_factory=list)
     flange_positions: list[np.ndarray] = field(default_factory=list)
     sensed_wrenches: list[np.ndarray] = field(default_factory=list)
+    #: Pins that bend (docs/delicate.md): each pin's tip offset, elastic included, and its
+    #: permanent one per row ``(n_pins, 2)`` (mm), from ``info``.
+    pin_deflections: list[np.ndarray] = field(default_factory=list)
+    pin_bends: list[np.ndarray] = field(default_factory=list)
 
     def on_reset(self, observation: np.ndarray, info: Mapping[str, Any]) -> None:
         """Row 0: the state after ``reset``."""
@@ -90,6 +95,8 @@ class EpisodeBuffer:
             self.events.append((step, "WARN", f"collision: peak {info['peak_force']:.3g} N"))
         if "error" in info:
             self.events.append((step, "ERROR", f"simulator fault: {info['error']}"))
+        if len(self.pin_bends) > 1:
+            self._bend_events(step, info)
         if terminated or truncated:
             outcome = "success" if info["success"] else "truncated without success"
             self.events.append(
@@ -104,6 +111,19 @@ class EpisodeBuffer:
     def result(self) -> dict[str, Any]:
         """Nothing for the episode's record: the buffer is sent to rerun."""
         return {}
+
+    def _bend_events(self, step: int, info: Mapping[str, Any]) -> None:
+        """The step's events of pins that bend: which yielded (their permanent offset grew)
+        and, on the step it happened, the part's damage."""
+        before, now = self.pin_bends[-2], self.pin_bends[-1]
+        grew = np.flatnonzero(np.any(now != before, axis=1))
+        if grew.size:
+            offsets = np.hypot(now[grew, 0], now[grew, 1]) * 1e3
+            pins = ", ".join(f"pin {i} {um:.1f} µm" for i, um in zip(grew, offsets, strict=True))
+            self.events.append((step, "WARN", f"yielded: permanent tip offsets {pins}"))
+        if info.get("damaged_at") == step:
+            worst = float(np.max(np.hypot(now[:, 0], now[:, 1])))
+            self.events.append((step, "ERROR", f"part damaged: a pin bent {worst:.3f} mm for good"))
 
     @property
     def seed(self) -> int | None:
@@ -120,6 +140,9 @@ class EpisodeBuffer:
         self.wrenches.append(np.array(info["wrench"], dtype=float))
         if "sensed_wrench" in info:
             self.sensed_wrenches.append(np.array(info["sensed_wrench"], dtype=float))
+        if "pin_deflection" in info:
+            self.pin_deflections.append(np.array(info["pin_deflection"], dtype=float))
+            self.pin_bends.append(np.array(info["pin_bend"], dtype=float))
 
 
 def _indexes(steps: np.ndarray, control_dt: float) -> list[rr.TimeColumn]:
@@ -141,7 +164,8 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
     if not episode.steps:
         raise ValueError(f"episode {k} has no rows; allowed: a buffer started by on_reset()")
     spec = episode.metadata["spec"]
-    log_workpiece(stream, workpiece_path(k), spec, plugs=plugs_path(k))
+    bending = len(episode.pin_deflections) == len(episode.steps)
+    log_workpiece(stream, workpiece_path(k), spec, plugs=plugs_path(k), pins=not bending)
     meta = {key: v for key, v in episode.metadata.items() if key != "spec" and v is not None}
     stream.log(
         series_path("metadata", k),
@@ -170,6 +194,8 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
     )
     if episode.arm is not None and episode.arm_poses:
         _send_arm(stream, episode, rows)
+    if bending:
+        _send_bent_pins(stream, episode, rows)
     for name, values in (("pose", poses), ("wrench", wrenches)):
         stream.send_columns(
             series_path(name, k),
@@ -195,6 +221,24 @@ def send_episode(stream: rr.RecordingStream, episode: EpisodeBuffer) -> None:
         series_path("events", k),
         indexes=_indexes(np.array(ev_steps, dtype=np.int64), episode.control_dt),
         columns=rr.TextLog.columns(text=list(texts), level=list(levels)),
+    )
+
+
+def _send_bent_pins(stream: rr.RecordingStream, episode: EpisodeBuffer, rows: list) -> None:
+    """Pins that bend, drawn as they are after every row (:func:`~tolins.record.scene.
+    bent_pin_strips`), a pin bent for good in :data:`~tolins.record.scene.BENT_COLOR`."""
+    spec = episode.metadata["spec"]
+    strips = bent_pin_strips(spec, np.array(episode.pin_deflections))
+    rows_n, n_pins = strips.shape[:2]
+    bent = np.any(np.array(episode.pin_bends) != 0.0, axis=2).ravel()
+    colors = np.where(bent[:, None], BENT_COLOR, PIN_COLOR).astype(np.uint8)
+    radii = np.tile(pin_geometry(spec).cylinders[1], rows_n)
+    stream.send_columns(
+        f"{workpiece_path(episode.index)}/pins",
+        indexes=rows,
+        columns=rr.LineStrips3D.columns(
+            strips=list(strips.reshape(-1, 2, 3)), radii=radii, colors=colors
+        ).partition(np.full(rows_n, n_pins)),
     )
 
 

@@ -25,6 +25,8 @@ PIN_COLOR = (217, 179, 77)
 BURR_COLOR = (220, 60, 50)
 SHORT_COLOR = (70, 130, 220)
 PLUG_COLOR = (200, 60, 160)
+#: A pin bent for good (pins that bend, docs/delicate.md).
+BENT_COLOR = (230, 110, 30)
 CARRIER_COLOR = (153, 153, 166, 110)
 
 
@@ -59,6 +61,22 @@ def log_board(stream: rr.RecordingStream, spec: SocketSpec) -> None:
         rr.LineStrips3D(board.hole_outlines, colors=HOLE_COLOR, radii=0.01),
         static=True,
     )
+
+
+def bent_pin_strips(spec: SocketSpec, deflections: np.ndarray) -> np.ndarray:
+    """Round pins that bend as line strips ``(rows, n_pins, 2, 3)`` from root to tip, in the
+    workpiece frame: each pin turned about its root (the carrier's underside) so that its
+    tip is offset by ``deflections`` ``(rows, n_pins, 2)`` (mm), its length kept."""
+    centers, _, lengths = pin_geometry(spec).cylinders
+    offsets = np.asarray(deflections, dtype=float)
+    root_z = centers[:, 2] + lengths / 2
+    reach = np.minimum(np.hypot(offsets[..., 0], offsets[..., 1]), lengths)
+    strips = np.empty((*offsets.shape[:2], 2, 3))
+    strips[:, :, 0, :2] = centers[:, :2]
+    strips[:, :, 0, 2] = root_z
+    strips[:, :, 1, :2] = centers[:, :2] + offsets
+    strips[:, :, 1, 2] = root_z - np.sqrt(lengths**2 - reach**2)
+    return strips
 
 
 @lru_cache(maxsize=64)
@@ -97,12 +115,18 @@ def workpiece_archetypes(spec: SocketSpec) -> tuple[rr.AsComponents, rr.AsCompon
 
 
 def log_workpiece(
-    stream: rr.RecordingStream, path: str, spec: SocketSpec, plugs: str | None = None
+    stream: rr.RecordingStream,
+    path: str,
+    spec: SocketSpec,
+    plugs: str | None = None,
+    pins: bool = True,
 ) -> None:
     """``spec``'s pins and carrier under the workpiece entity ``path``, static; with
-    ``plugs`` (a world-frame entity), the plugs of its blocked holes there."""
-    pins, carrier = workpiece_archetypes(spec)
-    stream.log(f"{path}/pins", pins, static=True)
+    ``plugs`` (a world-frame entity), the plugs of its blocked holes there. ``pins=False``:
+    the carrier only (pins that bend are drawn step by step: :func:`bent_pin_strips`)."""
+    straight, carrier = workpiece_archetypes(spec)
+    if pins:
+        stream.log(f"{path}/pins", straight, static=True)
     stream.log(f"{path}/carrier", carrier, static=True)
     boxes = plug_boxes(spec)
     if plugs is not None and boxes is not None:

@@ -186,6 +186,8 @@ _SLOWER = {
     "robustness with inference": 2.2,
     "robot": 1.8,
     "robot with inference": 2.0,
+    "delicate": 1.9,
+    "delicate with inference": 2.1,
     "study": 2.2,
 }
 

@@ -163,7 +163,11 @@ class InsertionEnv(gym.Env, SettingsAttributes):
     ``reward_collision``, ``reward_approach``, ``reward_height``, ``reward_alignment``,
     ``reward_depth``, ``reward_offset``, and ``error`` after a fault. With a robot, also
     ``sensed_pose`` and ``sensed_wrench`` (what the observation measures) and, at a reset
-    with ``grasp_error``, ``grasp_error`` (the drawn offset in the hand).
+    with ``grasp_error``, ``grasp_error`` (the drawn offset in the hand). With
+    ``pins="elastic-plastic"``, also ``pin_bend`` and ``pin_deflection`` (each pin's
+    permanent and present tip offset, ``(n_pins, 2)`` mm), ``damaged`` and ``damaged_at``
+    (the step a pin passed ``damage_threshold``), and ``reward_damage`` with a
+    ``damage_penalty``.
 
     **Robot** (``robot``): ``"free"`` (the default), the paper's ideal servos on a
     free-floating workpiece; ``"panda"`` (``pip install 'tolins[robot]'``; the ids
@@ -187,6 +191,16 @@ class InsertionEnv(gym.Env, SettingsAttributes):
 
     Version history:
 
+    * v2, after tolins 0.6.0: ``pins="elastic-plastic"`` (round pins that bend and stay
+      bent, ``pin_material``, ``damage_threshold``, ``damage_penalty``, ``keep_part``;
+      ``info["pin_bend"]``, ``info["pin_deflection"]``, ``info["damaged"]``) and its ids
+      ``tolins/{name}Delicate-v2`` (docs/delicate.md); rigid pins, the default, unchanged
+      bit for bit.
+    * v2 and v3, after tolins 0.6.0: the Panda's law compiled (numba, the numpy law the
+      fallback): the same law within rounding, its torques within 1e-9 of numpy's; the
+      last bits of every Panda episode change, and 3 of 1,600 expert episodes end
+      otherwise, all at 50 µm (``benchmarks/panda_law_equivalence.py``), as numpy's own
+      BLAS kernels change them from one CPU family to another.
     * v2 and v3, later in 0.6.0: the Panda's target stops at the workspace's edge, as
       the free body's joints do (an episode whose target stays inside is unchanged bit
       for bit); a single-number ``grasp_error``, a bool ``seed`` and a socket reaching

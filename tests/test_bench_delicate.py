@@ -90,11 +90,19 @@ def test_the_gentlest_learned_policy_damages_least_then_succeeds_most() -> None:
         ],
         "cells": {
             "safe": {"delicate": {"damage_mean": 0.0, "success_undamaged_mean": 1.0}},
-            "pi_n": {"delicate": {"damage_mean": 0.1, "success_undamaged_mean": 0.9}},
-            "pi_phi": {"delicate": {"damage_mean": 0.1, "success_undamaged_mean": 0.95}},
+            "pi_n": {
+                "delicate": {"damage_mean": 0.0, "success_undamaged_mean": 1.0},
+                "delicate_fit50": {"damage_mean": 0.2, "success_undamaged_mean": 0.8},
+            },
+            "pi_phi": {
+                "delicate": {"damage_mean": 0.1, "success_undamaged_mean": 0.9},
+                "delicate_fit50": {"damage_mean": 0.1, "success_undamaged_mean": 0.85},
+            },
         },
     }
-    assert gentlest(table)["policy"] == "pi_phi"
+    assert gentlest(table)["policy"] == "pi_n"  # same mean damage, more undamaged successes
+    table["cells"]["pi_phi"]["delicate_fit50"]["damage_mean"] = 0.05
+    assert gentlest(table)["policy"] == "pi_phi"  # the least damage over both columns
     assert DELICATE.prefix == "delicate-"
 
 

@@ -70,6 +70,6 @@ def format_delicate_section(delicate: dict[str, Any] | None) -> list[str]:
             "",
             f"Gentlest learned policy: {gentle['label']} (damage rate "
             f"{gentle['damage_mean']:.2f}, success without damage "
-            f"{gentle['success_undamaged_mean']:.2f}).",
+            f"{gentle['success_undamaged_mean']:.2f}, means over the columns).",
         ]
     return lines

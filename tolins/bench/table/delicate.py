@@ -74,31 +74,33 @@ def damage_claim(table: dict[str, Any], condition: str = "delicate") -> dict[str
     }
 
 
-def gentlest(table: dict[str, Any], condition: str = "delicate") -> dict[str, Any] | None:
-    """The learned policy of ``table`` that damaged the fewest parts on ``condition``
-    (ties: the one with more successes without damage, then the table's order), with its
-    damage rate; ``None`` when no learned policy ran."""
+def gentlest(table: dict[str, Any]) -> dict[str, Any] | None:
+    """The learned policy of ``table`` that damaged the fewest parts over all its
+    conditions (their mean damage rate; ties: the one with more successes without damage,
+    then the table's order), with both means; ``None`` when no learned policy ran."""
     learned = [p for p in table["policies"] if p["agent"] not in ("safe", "efficient")]
     if not learned:
         return None
 
-    def rank(policy: dict[str, Any]) -> tuple[float, float]:
-        cell = table["cells"][policy["id"]][condition]
-        return cell["damage_mean"], -cell["success_undamaged_mean"]
+    def means(policy: dict[str, Any]) -> tuple[float, float]:
+        cells = table["cells"][policy["id"]].values()
+        damage = sum(cell["damage_mean"] for cell in cells) / len(cells)
+        success = sum(cell["success_undamaged_mean"] for cell in cells) / len(cells)
+        return damage, success
 
-    best = min(learned, key=rank)
-    cell = table["cells"][best["id"]][condition]
+    best = min(learned, key=lambda policy: (means(policy)[0], -means(policy)[1]))
+    damage, success = means(best)
     return {
         "policy": best["id"],
         "label": best["label"],
-        "damage_mean": cell["damage_mean"],
-        "success_undamaged_mean": cell["success_undamaged_mean"],
+        "damage_mean": damage,
+        "success_undamaged_mean": success,
     }
 
 
 def with_verdicts(table: dict[str, Any] | None) -> dict[str, Any] | None:
-    """``table`` with its ``claim`` (:func:`damage_claim`) and ``gentlest``
-    (:func:`gentlest`) on the paper's 2*2 (``None`` stays ``None``)."""
+    """``table`` with its ``claim`` (:func:`damage_claim`, on the paper's 2*2) and
+    ``gentlest`` (:func:`gentlest`) (``None`` stays ``None``)."""
     if table is None:
         return None
     return {**table, "claim": damage_claim(table), "gentlest": gentlest(table)}

@@ -33,10 +33,7 @@ def compile_model(
     physics version (:mod:`tolins.physics.versions`: its number or the version itself);
     ``pins``: elastic-plastic pins (``None``: rigid)."""
     version = physics_version_of(physics_version)
-    if pins is None:
-        xml = make_mjcf(socket, board_body=not version.board_in_world)
-    else:
-        xml = make_mjcf(socket, board_body=not version.board_in_world, elastic=pins)
+    xml = make_mjcf(socket, board_body=not version.board_in_world, elastic=pins)
     return mujoco.MjModel.from_xml_string(xml)
 
 
@@ -45,10 +42,9 @@ def model_builder(
 ) -> Callable[[SocketSpec], mujoco.MjModel]:
     """:func:`compile_model` of one physics version (and pins), looked up here once, as a
     picklable one-argument function (for a :class:`SocketCache`)."""
-    version = physics_version_of(physics_version)
-    if pins is None:
-        return functools.partial(compile_model, physics_version=version)
-    return functools.partial(compile_model, physics_version=version, pins=pins)
+    return functools.partial(
+        compile_model, physics_version=physics_version_of(physics_version), pins=pins
+    )
 
 
 class SocketCache(Generic[T]):

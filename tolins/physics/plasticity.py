@@ -45,10 +45,9 @@ def return_mapping(
     plastic: np.ndarray,
     eq_data: np.ndarray,
     equalities: np.ndarray,
-) -> int:
+) -> None:
     """Return every pin beyond yield onto its yield surface, in place: ``plastic`` ``(n,
-    2)`` and the equalities' ``eq_data[:, 0]``; the number of pins that yielded."""
-    yielded = 0
+    2)`` and the equalities' ``eq_data[:, 0]``."""
     for i in range(hinges.shape[0]):
         ex = qpos[hinges[i, 0]] - plastic[i, 0]
         ey = qpos[hinges[i, 1]] - plastic[i, 1]
@@ -59,8 +58,6 @@ def return_mapping(
             plastic[i, 1] += ey * scale
             eq_data[equalities[i, 0], 0] = plastic[i, 0]
             eq_data[equalities[i, 1], 0] = plastic[i, 1]
-            yielded += 1
-    return yielded
 
 
 def safe_steps(
@@ -101,7 +98,7 @@ def safe_steps(
 
 
 @functools.cache
-def kernels() -> tuple[Callable[..., int], Callable[..., int]]:
+def kernels() -> tuple[Callable[..., None], Callable[..., int]]:
     """:func:`return_mapping` and :func:`safe_steps`, compiled with numba where it is
     installed (imported here, on first use, so that ``import tolins`` does not load it),
     else as they are."""
@@ -134,7 +131,6 @@ class PinPlasticity:
         roots = model.body_pos[model.jnt_bodyid[joints[:, 0]], :2]
         self.reach = np.hypot(roots[:, 0], roots[:, 1]) + self.lengths
         self.plastic = np.zeros((len(self.hinges), 2))
-        self.yielded = 0
         kernels()  # numba imported now, not in the first step
 
     def assign(self, plastic: np.ndarray | None = None) -> None:
@@ -166,7 +162,7 @@ class PinPlasticity:
 
     def update(self, qpos: np.ndarray) -> None:
         """The return mapping after a physics step that left the simulation at ``qpos``."""
-        self.yielded += kernels()[0](
+        kernels()[0](
             qpos, self.hinges, self.theta_y, self.plastic, self.model.eq_data, self.equalities
         )
 

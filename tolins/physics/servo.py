@@ -341,12 +341,9 @@ class ServoStepper:
             ):
                 self._limits, self._limits_key = ServoLimits.stack([servo_limits(m)]), key
         mujoco.mj_resetData(m, d)
-        if self.plasticity is None:
-            d.qpos[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
-            d.act[:] = d.qpos
-        else:
-            d.act[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
-            d.qpos[: m.nu] = d.act
+        self._servo_q[:] = np.asarray(pose, dtype=float)[self.layout.joint_pose]
+        d.act[:] = self._servo_q
+        if self.plasticity is not None:
             self.plasticity.assign(self.plasticity.plastic if keep_part else None)
             self.plasticity.place(d.qpos, d.qvel)
         mujoco.mj_forward(m, d)
@@ -405,10 +402,9 @@ class ServoStepper:
         segments, self._window_left = chunk_segments(n, self._window_left, self.step_factor)
         if self.plasticity is not None:
             queue = [[factor, steps] for factor, steps in segments if steps]
-            step = functools.partial(mujoco.mj_step, m, d)
             while queue:
                 factor, k, last = next_chunk(self.plasticity, d.qpos, d.qvel, d.ctrl, queue)
-                run_chunk(lambda j, step=step: step(nstep=j), [m], factor, k, last)
+                run_chunk(lambda j: mujoco.mj_step(m, d, nstep=j), [m], factor, k, last)
                 self.plasticity.update(d.qpos)
             return
         run_segments(lambda k: mujoco.mj_step(m, d, nstep=k), [m], segments, self.lazy_sensors)
@@ -579,19 +575,15 @@ class BatchServo:
         :meth:`ServoStepper.reset` one (``keep_part``: per simulation, its elastic-plastic
         pins as bent as they are)."""
         self.batch.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
+        self.act[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
+        self.qpos[ids, : self.act.shape[1]] = self.act[ids]
         if self.elastic:
-            nu = len(self.layout.joint_pose)
-            self.act[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
-            self.qpos[ids, :nu] = self.act[ids]
             keep = np.zeros(len(ids), bool) if keep_part is None else keep_part
             for i, kept in zip(ids.tolist(), keep.tolist(), strict=True):
                 plasticity = self.plasticity[i]
                 plasticity.assign(plasticity.plastic if kept else None)
                 plasticity.place(self.qpos[i], self.qvel[i])
             self.batch.set_models(self.models)  # the plastic sets in eq_data, read anew
-        else:
-            self.qpos[ids] = np.asarray(poses, dtype=float)[:, self.layout.joint_pose]
-            self.act[ids] = self.qpos[ids]
         self.batch.forward(ids)
         force = sequential_sum(self.sensordata[ids, self.layout.touch]) * FORCE_SCALE
         return self.state(ids, force, None)
@@ -631,10 +623,8 @@ class BatchServo:
         return [sum(warning[i, :, 1].tolist()) for i in self.ids.tolist()]
 
     def anchor(self) -> None:
-        if self.elastic:
-            self.act[self.ids] = self.qpos[self.ids, : len(self.layout.joint_pose)]
-        else:
-            self.act[self.ids] = self.qpos[self.ids]
+        # The servos follow the workpiece's joints, the first in qpos (pin hinges after).
+        self.act[self.ids] = self.qpos[self.ids, : self.act.shape[1]]
 
     def choose_steps(self, chunks: list[int]) -> None:
         ids = self.ids

@@ -377,9 +377,9 @@ class ServoStepper:
         self.step_window, self.step_factor = 0, 1
         if self.free_flight and self._limits is not None:
             d, timestep = self.data, self.model.opt.timestep
-            limits, q = self._limits, slice(None)
+            limits, q = self._limits, slice(0, self.model.nu)  # the workpiece's joints
             if self.plasticity is not None:
-                limits, q = bent_limits(limits, [self.plasticity], [d.qpos]), slice(0, 4)
+                limits = bent_limits(limits, [self.plasticity], [d.qpos])
             window, factor = free_flight_plan(
                 limits,
                 d.qpos[None, q],
@@ -636,7 +636,8 @@ class BatchServo:
             if self.elastic:
                 pins = [self.plasticity[i] for i in ids.tolist()]
                 limits = bent_limits(limits, pins, list(qpos))
-                qpos, qvel = qpos[:, :4], qvel[:, :4]
+                nu = self.act.shape[1]  # the workpiece's joints, before the pin hinges
+                qpos, qvel = qpos[:, :nu], qvel[:, :nu]
             self.step_windows, self.step_factors = free_flight_plan(
                 limits,
                 qpos,

@@ -341,3 +341,47 @@ def test_the_deep_rl_claim_is_not_evaluated_at_unequal_budgets():
     assert len(unequal.comparisons) == 4  # the pairs are still shown
     assert deep_rl(budgets=(288_000, 288_000)).verdict == "held"
     assert deep_rl().verdict == "held"
+
+
+@pytest.mark.parametrize("n", [1, 3, 8, 20, 100])
+def test_batched_intervals_are_rliables_bit_for_bit(n):
+    """Row intervals, plain means and paired differences, computed on the whole batch of
+    resamples at once, equal rliable's ``get_interval_estimates`` evaluating one resample
+    at a time (the same seed, the same draws)."""
+    from rliable import library
+
+    from tolins.bench.table import statistics
+
+    def rliable(scores, func):
+        with statistics._seeded_global_rng():
+            point, interval = library.get_interval_estimates(
+                {"x": scores}, func, reps=statistics.REPS, confidence_interval_size=0.95
+            )
+        return point["x"], interval["x"]
+
+    rng = np.random.default_rng(n)
+    values = {
+        "reward": [list(rng.normal(20.0, 6.0, n))],
+        "success": [list(rng.integers(0, 2, n).astype(float))],
+        "steps": [list(rng.integers(20, 41, n).astype(float))],
+        "collisions": [list(rng.integers(0, 5, n).astype(float))],
+    }
+    entry = row_intervals(values)
+    scores = np.array([values[name][0] for name in statistics.FIGURES]).T
+    point, interval = rliable(scores, lambda x: np.concatenate([x.mean(0), [iqm(x[:, 0])]]))
+    for i, name in enumerate(statistics.FIGURES):
+        assert entry[f"{name}_ci"] == list(interval[:, i]), name
+    assert (entry["reward_iqm"], entry["reward_iqm_ci"]) == (point[-1], list(interval[:, -1]))
+    a, b = scores[:, 0], scores[:, 2]
+    paired = difference(a, b, EPISODES, paired=True)
+    point, interval = rliable((a - b)[:, None], lambda d: np.array([d.mean()]))
+    assert (paired.estimate, paired.low, paired.high) == (point[0], *interval[:, 0])
+    c = rng.normal(18.0, 6.0, n + 2)  # resampled independently: lengths may differ
+    unpaired = difference(a, c, EPISODES)
+    point, interval = rliable(
+        [a[:, None], c[:, None]], lambda p, q: np.array([p.mean() - q.mean()])
+    )
+    assert (unpaired.estimate, unpaired.low, unpaired.high) == (point[0], *interval[:, 0])
+    better = probability_of_improvement(a, c, EPISODES)
+    point, interval = rliable([a[:, None], c[:, None]], lambda p, q: np.array([improvement(p, q)]))
+    assert (better.estimate, better.low, better.high) == (point[0], *interval[:, 0])

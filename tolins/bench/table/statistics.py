@@ -25,17 +25,21 @@ episode-level difference is called only when its whole episode-level CI lies bey
 retraining could plausibly undo; anything smaller (e.g. +0.8 ± 0.6) is inconclusive,
 however many standard errors it is.
 
-The resampling is rliable's (:class:`rliable.library.StratifiedBootstrap` and
-``StratifiedIndependentBootstrap`` through ``get_interval_estimates``). Its metrics
-``aggregate_iqm`` and ``probability_of_improvement`` call scipy once per resample (0.2–0.7
-ms each, seconds per row); :func:`iqm` and :func:`improvement` compute the same numbers in
-numpy (tested equal to rliable's) and are what the bootstrap evaluates.
+The resamples are rliable's: those its ``get_interval_estimates`` draws from numpy's
+global stream with ``StratifiedBootstrap`` (one table, each figure's runs drawn with
+replacement) and ``StratifiedIndependentBootstrap`` (two samples, each drawn on its own),
+in the same order, and the interval arch's percentile interval of them; rliable evaluates
+a statistic one resample at a time in Python (2 s for a row), here every statistic is
+computed on the whole batch of resamples at once (:func:`_batch_estimate`,
+:func:`_independent_estimate`), giving rliable's intervals bit for bit (tests compare
+them). rliable's metrics ``aggregate_iqm`` and ``probability_of_improvement`` are
+:func:`iqm` and :func:`improvement` here (tested equal to rliable's).
 
-rliable draws its resamples from numpy's global RNG; every estimate here seeds it with
-:data:`BOOTSTRAP_SEED` and restores it afterwards (under a lock), so the same data give
-the same interval, in any order, and the caller's global random stream is where it was.
-Another *thread* drawing from that RNG meanwhile (pycma's ``ask`` does) would see the
-seeded stream, so the bench computes intervals only after its stages have finished.
+Every estimate seeds the global stream with :data:`BOOTSTRAP_SEED` and restores it
+afterwards (under a lock), so the same data give the same interval, in any order, and the
+caller's global random stream is where it was. Another *thread* drawing from that RNG
+meanwhile (pycma's ``ask`` does) would see the seeded stream, so the bench computes
+intervals only after its stages have finished.
 """
 
 from __future__ import annotations
@@ -118,33 +122,65 @@ def _seeded_global_rng() -> Iterator[None]:
 def iqm(x: np.ndarray) -> float:
     """The interquartile mean of ``x`` (all its entries): rliable's ``aggregate_iqm``
     (``scipy.stats.trim_mean(x, 0.25)``: sort, drop ⌊n/4⌋ values at each end, average)."""
-    values = np.sort(np.asarray(x, dtype=float), axis=None)
-    cut = int(0.25 * len(values))
-    return float(values[cut : len(values) - cut].mean())
+    return float(iqm_of_batch(np.ravel(np.asarray(x, dtype=float))[None])[0])
 
 
 def improvement(x: np.ndarray, y: np.ndarray) -> float:
     """P(X > Y) of two samples (ties count half): rliable's ``probability_of_improvement``
     for one task (its Mann-Whitney U / (n_x n_y))."""
-    a, b = np.ravel(x)[:, None], np.ravel(y)[None, :]
-    return float(np.mean(a > b) + 0.5 * np.mean(a == b))
+    return float(improvement_of_batch(np.ravel(x)[None], np.ravel(y)[None])[0])
 
 
-def _estimate(
-    scores: np.ndarray | list[np.ndarray], func: Callable[..., np.ndarray]
+def improvement_of_batch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """:func:`improvement` of each pair of rows of ``x`` and ``y`` (batch × samples)."""
+    a, b = x[:, :, None], y[:, None, :]
+    return np.mean(a > b, axis=(1, 2)) + 0.5 * np.mean(a == b, axis=(1, 2))
+
+
+def iqm_of_batch(x: np.ndarray) -> np.ndarray:
+    """:func:`iqm` of each row of ``x`` (batch × samples)."""
+    values = np.sort(x, axis=1)
+    cut = int(0.25 * x.shape[1])
+    return values[:, cut : x.shape[1] - cut].mean(axis=1)
+
+
+def _batch_estimate(
+    scores: np.ndarray, func: Callable[[np.ndarray], np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """rliable's point estimate and (2, k) CI of ``func`` on ``scores`` (runs × tasks)."""
-    import warnings
+    """rliable's point estimate and (2, p) percentile CI of a statistic on ``scores`` (runs
+    × figures) as ``get_interval_estimates`` computes them with its ``StratifiedBootstrap``:
+    ``func`` maps a batch of tables (batch × runs × figures) to the statistic's p values of
+    each (batch × p); the resamples are rliable's (the same draws from the global stream,
+    in one call)."""
+    with _seeded_global_rng():
+        runs = np.random.choice(len(scores), (REPS, *scores.shape), replace=True)
+    return func(scores[None])[0], _percentiles(func(scores[runs, np.arange(scores.shape[1])]))
 
-    from rliable import library
 
-    with _seeded_global_rng(), warnings.catch_warnings():
-        # arch warns when every resample gives the same value (a CI of width 0 is right).
-        warnings.simplefilter("ignore", RuntimeWarning)
-        point, interval = library.get_interval_estimates(
-            {"x": scores}, func, reps=REPS, confidence_interval_size=CONFIDENCE
-        )
-    return np.asarray(point["x"], dtype=float), np.asarray(interval["x"], dtype=float)
+def _independent_estimate(
+    samples: Sequence[np.ndarray], func: Callable[..., np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """rliable's point estimate and (2, p) percentile CI of a statistic of independently
+    resampled 1-D ``samples``, as ``get_interval_estimates`` computes them with its
+    ``StratifiedIndependentBootstrap``: ``func`` maps one batch of resamples per sample
+    (batch × its length) to the statistic's p values of each (batch × p); the resamples
+    are rliable's (per replication, one draw per sample from the global stream)."""
+    picks: list[list[np.ndarray]] = [[] for _ in samples]
+    with _seeded_global_rng():
+        for _ in range(REPS):
+            for sample, pick in zip(samples, picks, strict=True):
+                pick.append(np.random.choice(len(sample), (len(sample), 1), replace=True)[:, 0])
+    point = func(*(sample[None] for sample in samples))[0]
+    resamples = [sample[np.array(pick)] for sample, pick in zip(samples, picks, strict=True)]
+    return point, _percentiles(func(*resamples))
+
+
+def _percentiles(values: np.ndarray) -> np.ndarray:
+    """The (2, p) 95 % percentile interval of each column of ``values`` (replications ×
+    p), as arch's ``conf_int(method="percentile")`` computes it."""
+    alpha = (1.0 - CONFIDENCE) / 2
+    percentiles = [100 * alpha, 100 * (1.0 - alpha)]
+    return np.array([np.percentile(column, percentiles) for column in values.T]).T
 
 
 def _samples(values: Sequence[float], what: str) -> np.ndarray:
@@ -169,10 +205,10 @@ def row_intervals(values: dict[str, list[list[float]]]) -> dict[str, Any]:
         columns = [list(values[name][0]) for name in FIGURES]
     scores = np.asarray(columns, dtype=float).T
 
-    def func(x: np.ndarray) -> np.ndarray:
-        return np.concatenate([x.mean(axis=0), [iqm(x[:, 0])]])
+    def means_and_iqm(x: np.ndarray) -> np.ndarray:
+        return np.concatenate([x.mean(axis=1), iqm_of_batch(x[:, :, 0])[:, None]], axis=1)
 
-    point, interval = _estimate(scores, func)
+    point, interval = _batch_estimate(scores, means_and_iqm)
     entry: dict[str, Any] = {
         f"{name}_ci": [float(interval[0, i]), float(interval[1, i])]
         for i, name in enumerate(FIGURES)
@@ -194,7 +230,7 @@ def mean_intervals(values: dict[str, list[list[float]]]) -> dict[str, list[float
         columns = [[float(np.mean(s)) for s in values[name]] for name in names]
     else:
         columns = [list(values[name][0]) for name in names]
-    _, interval = _estimate(np.asarray(columns, dtype=float).T, lambda x: x.mean(axis=0))
+    _, interval = _batch_estimate(np.asarray(columns, dtype=float).T, lambda x: x.mean(axis=1))
     return {
         f"{name}_ci": [float(interval[0, i]), float(interval[1, i])] for i, name in enumerate(names)
     }
@@ -211,10 +247,10 @@ def difference(
     if paired:
         if len(a) != len(b):
             raise ValueError(f"paired samples of {len(a)} and {len(b)}; allowed: equal lengths")
-        point, interval = _estimate((a - b)[:, None], lambda d: np.array([d.mean()]))
+        point, interval = _batch_estimate((a - b)[:, None], lambda d: d.mean(axis=1))
     else:
-        point, interval = _estimate(
-            [a[:, None], b[:, None]], lambda p, q: np.array([p.mean() - q.mean()])
+        point, interval = _independent_estimate(
+            [a, b], lambda p, q: (p.mean(axis=1) - q.mean(axis=1))[:, None]
         )
     n = len(a) if paired else min(len(a), len(b))
     return Interval(float(point[0]), float(interval[0, 0]), float(interval[1, 0]), over, n)
@@ -223,8 +259,10 @@ def difference(
 def probability_of_improvement(x: Sequence[float], y: Sequence[float], over: str) -> Interval:
     """P(X > Y) (:func:`improvement`: a random sample of x beats one of y, ties half) with
     its CI, x and y resampled independently."""
-    a, b = _samples(x, "x")[:, None], _samples(y, "y")[:, None]
-    point, interval = _estimate([a, b], lambda p, q: np.array([improvement(p, q)]))
+    a, b = _samples(x, "x"), _samples(y, "y")
+    point, interval = _independent_estimate(
+        [a, b], lambda p, q: improvement_of_batch(p, q)[:, None]
+    )
     return Interval(
         float(point[0]), float(interval[0, 0]), float(interval[1, 0]), over, min(len(a), len(b))
     )

@@ -376,12 +376,11 @@ def test_batched_intervals_are_rliables_bit_for_bit(n):
     paired = difference(a, b, EPISODES, paired=True)
     point, interval = rliable((a - b)[:, None], lambda d: np.array([d.mean()]))
     assert (paired.estimate, paired.low, paired.high) == (point[0], *interval[:, 0])
-    c = rng.normal(18.0, 6.0, n + 2)  # resampled independently: lengths may differ
-    unpaired = difference(a, c, EPISODES)
-    point, interval = rliable(
-        [a[:, None], c[:, None]], lambda p, q: np.array([p.mean() - q.mean()])
-    )
-    assert (unpaired.estimate, unpaired.low, unpaired.high) == (point[0], *interval[:, 0])
-    better = probability_of_improvement(a, c, EPISODES)
-    point, interval = rliable([a[:, None], c[:, None]], lambda p, q: np.array([improvement(p, q)]))
-    assert (better.estimate, better.low, better.high) == (point[0], *interval[:, 0])
+    for c in (b, rng.normal(18.0, 6.0, n + 2)):  # resampled independently: any lengths
+        unpaired = difference(a, c, EPISODES)
+        pair = [a[:, None], c[:, None]]
+        point, interval = rliable(pair, lambda p, q: np.array([p.mean() - q.mean()]))
+        assert (unpaired.estimate, unpaired.low, unpaired.high) == (point[0], *interval[:, 0])
+        better = probability_of_improvement(a, c, EPISODES)
+        point, interval = rliable(pair, lambda p, q: np.array([improvement(p, q)]))
+        assert (better.estimate, better.low, better.high) == (point[0], *interval[:, 0])

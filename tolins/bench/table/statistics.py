@@ -165,13 +165,15 @@ def _independent_estimate(
     ``StratifiedIndependentBootstrap``: ``func`` maps one batch of resamples per sample
     (batch × its length) to the statistic's p values of each (batch × p); the resamples
     are rliable's (per replication, one draw per sample from the global stream)."""
-    picks: list[list[np.ndarray]] = [[] for _ in samples]
+    sizes = [len(sample) for sample in samples]
     with _seeded_global_rng():
-        for _ in range(REPS):
-            for sample, pick in zip(samples, picks, strict=True):
-                pick.append(np.random.choice(len(sample), (len(sample), 1), replace=True)[:, 0])
+        if len(set(sizes)) == 1:  # draws of one bound: the stream's order in one call
+            picks = list(np.random.choice(sizes[0], (REPS, len(sizes), sizes[0])).swapaxes(0, 1))
+        else:
+            draws = [[np.random.choice(n, n) for n in sizes] for _ in range(REPS)]
+            picks = [np.array(column) for column in zip(*draws, strict=True)]
     point = func(*(sample[None] for sample in samples))[0]
-    resamples = [sample[np.array(pick)] for sample, pick in zip(samples, picks, strict=True)]
+    resamples = [sample[pick] for sample, pick in zip(samples, picks, strict=True)]
     return point, _percentiles(func(*resamples))
 
 

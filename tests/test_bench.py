@@ -286,18 +286,22 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tiny_bench, tmp_path
     assert len(again.cached) == 51
     assert json.loads((tmp_path / "results.json").read_text())["rows"] == first
 
-    # the robustness and Panda tables on MuJoCo: tests/test_bench_robustness.py
+    # Table 1 on MuJoCo (the deep-RL rows train the same SB3 code on it: tests/test_sb3.py;
+    # the robustness and Panda tables: tests/test_bench_robustness.py; the delicate table:
+    # tests/test_bench_delicate.py)
     mujoco = BenchConfig(
         profile="tiny",
         backend="mujoco",
+        rows=",".join(ROW_IDS),
         out=str(tmp_path),
         study=False,
         robustness=False,
         robot=False,
+        delicate=False,
     )
     run_bench(mujoco)
     results = json.loads((tmp_path / "results.json").read_text())["rows"]
-    assert list(results) == list(ALL_ROW_IDS)
+    assert list(results) == list(ROW_IDS)
     markdown = (tmp_path / "results.md").read_text()
     assert "## Backends side by side (mujoco vs kinematic)" in markdown
     assert "## Inference study" not in markdown

@@ -31,10 +31,12 @@ ROWS = "C2.1,C2.2,C2.3,C3.1,C3.2"
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    """One tiny run with one training seed, then the same folder with three (seed 0's
-    stages come from the cache): each run's results folder."""
+def runs(tiny_bench, tmp_path_factory):
+    """One tiny run with one training seed (its stages the shared tiny bench's,
+    tests/conftest.py), then the same folder with three (seed 0's stages come from the
+    cache): each run's results folder."""
     root = tmp_path_factory.mktemp("runs")
+    tiny_bench.copy_stages(root / "bench")
     bench = ["bench", "--profile", "tiny", "--backend", "kinematic", "--rows", ROWS]
     bench += ["--no-study", "--out", str(root / "bench")]
     assert main([*bench, "--seeds", "1"]) == 0

@@ -24,10 +24,11 @@ def _config(out, **kwargs) -> BenchConfig:
 def test_the_bench_evaluates_its_policies_on_delicate_pins(tmp_path) -> None:
     run = run_bench(_config(tmp_path), progress=False, log=lambda _: None)
     table = run.delicate
-    assert [c["id"] for c in table["conditions"]] == ["delicate", "delicate_fit50"]
+    columns = ["delicate", "delicate_fit50", "delicate_c4"]
+    assert [c["id"] for c in table["conditions"]] == columns
     assert [p["id"] for p in table["policies"]] == ["safe", "efficient"]  # nothing trained
     for policy in ("safe", "efficient"):
-        for condition in ("delicate", "delicate_fit50"):
+        for condition in columns:
             cell = table["cells"][policy][condition]
             assert 0.0 <= cell["damage_mean"] <= 1.0
             assert cell["success_undamaged_mean"] <= cell["success_mean"]
@@ -36,12 +37,14 @@ def test_the_bench_evaluates_its_policies_on_delicate_pins(tmp_path) -> None:
     assert table["gentlest"] is None  # no learned policy ran
     written = json.loads((tmp_path / "results.json").read_text())
     assert written["delicate"]["claim"] == table["claim"]
-    assert "## Delicate pins (beyond the paper)" in (tmp_path / "results.md").read_text()
+    markdown = (tmp_path / "results.md").read_text()
+    assert "## Delicate pins (beyond the paper)" in markdown
+    assert "`tolins/Circle2x1Defective-v2` with `pins='elastic-plastic'`" in markdown
     stages = sorted(p.name.rsplit("-", 1)[0] for p in (tmp_path / "stages").glob("delicate-*"))
     assert stages == ["delicate-efficient-seed0", "delicate-safe-seed0"]
     stage = next((tmp_path / "stages").glob("delicate-safe-*"))
     episodes = json.loads((stage / EPISODES).read_text())
-    assert all("damaged" in row for row in episodes["delicate"])
+    assert all("damaged" in row for column in columns for row in episodes[column])
     # Without the section, and on the kinematic simulator (whose pins cannot bend): none.
     off = run_bench(_config(tmp_path / "off", delicate=False), progress=False, log=lambda _: 0)
     kinematic = _config(tmp_path / "kinematic", backend="kinematic")

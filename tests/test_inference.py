@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -294,3 +296,64 @@ def test_physics_contact_evidence_matches_geometry() -> None:
         expected = np.arctan2(gaps[:, 1], gaps[:, 0])
         error = np.angle(np.exp(1j * (bearings - expected)))[blocked]
         assert np.all(np.abs(error) < 0.2)
+
+
+# --- the study on parts whose pins bend ---------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("settings", "message"),
+    [
+        ({"pins": "soft"}, "pins='soft'; allowed: 'rigid', 'elastic-plastic'"),
+        ({"pins": "elastic-plastic", "physics": True, "kinds": (), "pin_material": "gold"}, "gold"),
+        ({"pins": "elastic-plastic", "kinds": ()}, "allowed: physics=True"),
+        ({"pins": "elastic-plastic", "physics": True}, "allowed: () or ('bent',)"),
+    ],
+)
+def test_bad_pin_settings_of_the_study_are_one_line(settings, message) -> None:
+    with pytest.raises(ValueError, match=re.escape(message)):
+        StudyConfig(**settings)
+
+
+def test_an_attempt_meets_the_part_as_the_last_left_it_when_kept() -> None:
+    """A part bent by a sideways drag (its pins 0.5 mm in their holes) stays bent for the
+    next attempt that keeps it, which the bend blocks at the nominal goal, where a straight
+    part inserts; not kept, the part is straight again."""
+    from tolins.inference.physics import AttemptBatch
+    from tolins.paper import A_MAX
+
+    pins = StudyConfig(pins="elastic-plastic", physics=True, kinds=()).elastic_pins()
+    batch = AttemptBatch(SOCKET, slots=1, num_threads=1, pins=pins)
+    physics, slot = batch.physics, np.array([0])
+    physics.reset(slot, np.array([[0.0, 0.0, 0.0, 0.05]]))
+    while physics.step(slot, np.array([[0.0, 0.0, 0.0, -0.6]])).pose[0, 3] > -0.5:
+        pass
+    for _ in range(4):
+        state = physics.step(slot, np.array([[A_MAX[0], A_MAX[1], 0.0, 0.0]]))
+    assert np.hypot(*state.pin_bend[0].T).max() > pins.damage_threshold
+    nominal = [(SOCKET, np.zeros(3))]
+    ((inserted, blocked, _),) = batch.attempts(nominal, slots=[0], keep_part=[True])
+    assert not inserted and blocked.any()
+    assert np.array_equal(batch.bend(0), state.pin_bend[0])  # a push bends it no further
+    ((inserted, _, _),) = batch.attempts(nominal, slots=[0], keep_part=[False])
+    assert inserted and not batch.bend(0).any()
+    batch.close()
+
+
+def test_the_studys_straight_pushes_bend_no_pin_for_good() -> None:
+    """The study's attempts push the part straight down at a goal: the pins that meet the
+    board's top press along their axis (Euler's load is 20 times the servos' 5 N), and no
+    part is left damaged (elastic compliance may still let in a pin a rigid one would not:
+    outcomes may differ from rigid pins', benchmarks/README.md)."""
+    config = StudyConfig(samples=4, particles=200, workers=1, physics=True, kinds=())
+    config = dataclasses.replace(config, methods=("inference_contact", "random"))
+    bending = run_study(dataclasses.replace(config, pins="elastic-plastic"))
+    for method in config.methods:
+        assert len(bending.damaged[method]) == 4 and not bending.damaged[method].any()
+    figures = bending.to_json()
+    assert figures["pins"] == {"model": "elastic-plastic", "material": "phosphor_bronze"}
+    assert figures["methods"]["random"]["damaged"] == 0.0
+    assert set(run_study(config).to_json()["methods"]["random"]) == {
+        "success_within_10",
+        "mean_attempts",
+    }

@@ -8,6 +8,8 @@ import time
 
 from tolins.cli import checks
 from tolins.cli.args import Option, add_config_arguments, config_from_args
+from tolins.geometry.delicate import PIN_MODELS
+from tolins.geometry.materials import MATERIALS
 from tolins.inference.study import METHODS, StudyConfig
 
 #: The study's settings the command line leaves at their defaults.
@@ -31,6 +33,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
             help=f"comma-separated subset of {', '.join(METHODS)} (default: all); "
             "repeated, they add up",
         ),
+        "pins": Option(choices=PIN_MODELS),
+        "pin_material": Option(choices=sorted(MATERIALS)),
     }
     add_config_arguments(study, StudyConfig, options, skip=_FIXED)
     study.add_argument(
@@ -55,7 +59,9 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         methods = StudyConfig.methods if args.methods is None else parse_methods(args.methods)
-        config = config_from_args(StudyConfig, args, methods=methods)
+        # pins that bend: the bent workpieces only (the per-kind study keeps rigid pins)
+        kinds = StudyConfig.kinds if args.pins == "rigid" else ("bent",)
+        config = config_from_args(StudyConfig, args, methods=methods, kinds=kinds)
     except ValueError as error:
         return checks.fail("tolins infer-study", error)
     start = time.perf_counter()

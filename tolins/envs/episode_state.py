@@ -28,6 +28,7 @@ import numpy as np
 
 from tolins.envs.scoring import NO_SCORE, EpisodeScore, StepScore
 from tolins.envs.task_settings import TaskSettings
+from tolins.geometry.delicate import bent_beyond
 from tolins.geometry.specs import SocketSpec, workpiece_dict
 from tolins.geometry.workspace import check_goal, check_pose
 from tolins.physics.protocol import BackendState
@@ -94,7 +95,7 @@ def check_keep_part(settings: TaskSettings, options: dict[str, Any]) -> bool:
 def is_damaged(settings: TaskSettings, bend: np.ndarray) -> bool:
     """Whether a pin's permanent tip offset ``bend`` ``(n_pins, 2)`` (mm) reaches the
     settings' ``damage_threshold``."""
-    return bool(np.max(np.hypot(bend[:, 0], bend[:, 1])) >= settings.damage_threshold)
+    return bent_beyond(bend, settings.damage_threshold)
 
 
 def check_fixed_pose(settings: TaskSettings, pose: object) -> np.ndarray | None:

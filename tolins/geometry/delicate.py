@@ -47,6 +47,12 @@ class ElasticPins:
     damage_penalty: float | None = None
 
 
+def bent_beyond(bend: np.ndarray, threshold: float) -> bool:
+    """Whether some pin's permanent tip offset in ``bend`` ``(n_pins, 2)`` (mm) reaches
+    ``threshold`` (mm): a damaged part (:attr:`ElasticPins.damage_threshold`)."""
+    return bool(np.max(np.hypot(bend[:, 0], bend[:, 1])) >= threshold)
+
+
 @dataclass(frozen=True)
 class PinBeams:
     """Each pin's beam, ``(n_pins,)`` arrays in model units.

@@ -33,6 +33,14 @@ def format_table(result: StudyResult) -> str:
     summary = result.to_json()
     for method, within, share, attempts, cite in _rows(summary):
         lines.append(f"{method:<18} {within:>9.1%} {share:>13.1%} {attempts:>13.3f}   {cite}")
+    if "pins" in summary:
+        pins = summary["pins"]
+        lines += ["", f"{pins['model']} pins ({pins['material']}): parts left damaged"]
+        for method, figures in summary["methods"].items():
+            lines.append(
+                f"{method:<18} damaged {figures['damaged']:.1%}, inserted undamaged "
+                f"{figures['success_undamaged']:.1%}"
+            )
     if summary.get("kinds"):
         lines += ["", "per defect kind (method: within 10, mean attempts, not insertable)"]
         for kind, figures in summary["kinds"].items():

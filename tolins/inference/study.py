@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from tolins.geometry.defects import sample_defects
+from tolins.geometry.delicate import DEFAULT_MATERIAL, ElasticPins, bent_beyond, check_pins
 from tolins.geometry.specs import CircularSocket
 from tolins.geometry.tolerance import gaps_inside, pin_gaps, pins_inside
 from tolins.geometry.validation import check_seed
@@ -103,6 +104,12 @@ class StudyConfig:
         kind_samples: Workpieces per kind other than ``bent``.
         not_insertable_below: The defect model's inference stops and reports a workpiece
             not insertable when its best expected success falls below this.
+        pins: ``"elastic-plastic"``: the workpieces' pins bend and stay bent (``physics``
+            only, the bent workpieces only: ``kinds`` at most ``("bent",)``), and each
+            method's attempts on a workpiece meet the part as its earlier attempts left
+            it; ``"rigid"`` (default).
+        pin_material: The bending pins' material
+            (:data:`~tolins.geometry.materials.MATERIALS`).
     """
 
     samples: int = 500
@@ -116,6 +123,8 @@ class StudyConfig:
     kinds: tuple[str, ...] = STUDY_KINDS
     kind_samples: int = 12
     not_insertable_below: float = DISCARD_THRESHOLD
+    pins: str = "rigid"
+    pin_material: str = DEFAULT_MATERIAL
 
     def __post_init__(self) -> None:
         for name, least in (("samples", 1), ("max_attempts", 1), ("particles", 2), ("workers", 1)):
@@ -135,6 +144,22 @@ class StudyConfig:
             raise ValueError(
                 f"not_insertable_below={self.not_insertable_below!r}; allowed: 0 ≤ value < 1"
             )
+        if self.elastic_pins() is not None:
+            if not self.physics:
+                raise ValueError(
+                    "pins='elastic-plastic' bends pins in the physics; allowed: physics=True, "
+                    "or pins='rigid'"
+                )
+            if set(self.kinds) - {"bent"}:
+                raise ValueError(
+                    f"kinds={self.kinds!r} with pins='elastic-plastic'; allowed: () or ('bent',)"
+                )
+
+    def elastic_pins(self) -> ElasticPins | None:
+        """The workpieces' bending pins (damaged beyond half the radial clearance), or
+        ``None`` for rigid ones."""
+        material = None if self.pins == "rigid" else self.pin_material
+        return check_pins(SOCKET, self.pins, material, None)
 
 
 def parse_methods(text: str) -> tuple[str, ...]:
@@ -145,7 +170,9 @@ def parse_methods(text: str) -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class StudyResult:
-    """Per-workpiece outcomes: ``attempts[method][k]`` = attempt that inserted, 0 if none.
+    """Per-workpiece outcomes: ``attempts[method][k]`` = attempt that inserted, 0 if none;
+    ``damaged[method][k]``: the part was bent beyond the damage threshold when the method
+    was done with it (pins that bend only).
 
     ``kinds[kind]`` (each kind but ``bent``): ``{"attempts": {method: (K,)}, "not_insertable":
     {method: (K,) bool}, "insertable": (K,) bool}`` of that kind's workpieces.
@@ -156,13 +183,21 @@ class StudyResult:
     impossible: float
     attempts: dict[str, np.ndarray]
     kinds: dict[str, dict] = dataclasses.field(default_factory=dict)
+    damaged: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
     def summary(self, method: str) -> dict[str, float]:
-        """``success_within_10`` (of all workpieces) and ``mean_attempts`` of inserted ones."""
+        """``success_within_10`` (of all workpieces) and ``mean_attempts`` of inserted ones;
+        with pins that bend ``damaged`` (the share of parts left damaged) and
+        ``success_undamaged`` (inserted within 10 and not damaged)."""
         a = self.attempts[method]
         done = a[a > 0]
         mean = float(done.mean()) if len(done) else 0.0
-        return {"success_within_10": float(len(done) / len(a)), "mean_attempts": mean}
+        figures = {"success_within_10": float(len(done) / len(a)), "mean_attempts": mean}
+        if self.config.pins != "rigid":
+            damaged = self.damaged[method]
+            figures["damaged"] = float(damaged.mean())
+            figures["success_undamaged"] = float(np.mean((a > 0) & ~damaged))
+        return figures
 
     def kind_summary(self, kind: str) -> dict:
         """Per method on the ``kind`` workpieces: ``success_within_10``, ``mean_attempts``,
@@ -199,6 +234,8 @@ class StudyResult:
             "impossible": self.impossible,
             "methods": {m: self.summary(m) for m in self.config.methods},
         }
+        if self.config.pins != "rigid":
+            summary["pins"] = {"model": self.config.pins, "material": self.config.pin_material}
         if self.config.kinds:
             summary["kinds"] = {k: self.kind_summary(k) for k in self.config.kinds}
         return summary
@@ -254,7 +291,8 @@ def run_study(
             pool.join()
     inside = pins_inside(SOCKET, offsets, np.zeros(3)).all(-1)
     possible = pins_inside(SOCKET, offsets, centre_goals(SOCKET, offsets)).all(-1)
-    attempts = {m: np.array([row[m] for row in rows]) for m in config.methods}
+    attempts = {m: np.array([row[m][0] for row in rows]) for m in config.methods}
+    damaged = {m: np.array([row[m][1] for row in rows]) for m in config.methods}
     by_kind = {
         kind: {
             "attempts": {m: np.array([r[m][0] for r in kind_rows[kind]]) for m in config.methods},
@@ -265,7 +303,9 @@ def run_study(
         }
         for kind in kinds
     }
-    return StudyResult(config, float(inside.mean()), float(1 - possible.mean()), attempts, by_kind)
+    return StudyResult(
+        config, float(inside.mean()), float(1 - possible.mean()), attempts, by_kind, damaged
+    )
 
 
 def _results(results: multiprocessing.pool.IMapIterator) -> Iterator[Any]:
@@ -321,9 +361,9 @@ Outcome = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Attempts = Generator[np.ndarray, tuple[np.ndarray, np.ndarray], int]
 
 
-def _chunk(job: tuple[StudyConfig, np.ndarray, np.ndarray]) -> list[dict[str, int]]:
-    """Every method's result on each workpiece of a chunk (``job``: config, indices,
-    offsets)."""
+def _chunk(job: tuple[StudyConfig, np.ndarray, np.ndarray]) -> list[dict[str, tuple[int, bool]]]:
+    """Every method's ``(attempt that inserted, part damaged)`` on each workpiece of a
+    chunk (``job``: config, indices, offsets)."""
     config, indices, offsets = job
     runs = {
         (k, m): _attempt_goals(m, eps, config, _method_rng(config.seed, int(index), m))
@@ -331,10 +371,13 @@ def _chunk(job: tuple[StudyConfig, np.ndarray, np.ndarray]) -> list[dict[str, in
         for m in config.methods
     }
     if config.physics:
-        results = _lockstep_physics(runs, offsets)
+        results, damaged = _lockstep_physics(runs, offsets, pins=config.elastic_pins())
     else:
         results = {key: _drive(run, geometry_outcome(offsets[key[0]])) for key, run in runs.items()}
-    return [{m: results[(k, m)] for m in config.methods} for k in range(len(indices))]
+        damaged = dict.fromkeys(runs, False)
+    return [
+        {m: (results[(k, m)], damaged[(k, m)]) for m in config.methods} for k in range(len(indices))
+    ]
 
 
 def _kind_chunk(job: tuple[StudyConfig, str, np.ndarray, list[CircularSocket]]) -> list[dict]:
@@ -350,7 +393,7 @@ def _kind_chunk(job: tuple[StudyConfig, str, np.ndarray, list[CircularSocket]]) 
             eps = spec.pin_centers - spec.hole_centers
             runs[(k, m)] = _defect_attempt_goals(m, eps, config, rng)
     if config.physics:
-        results = _lockstep_physics(runs, None, specs)
+        results, _ = _lockstep_physics(runs, None, specs)
     else:
         results = {
             key: _drive(run, geometry_outcome(specs[key[0]].offsets, specs[key[0]]))
@@ -415,9 +458,12 @@ def _lockstep_physics(
     runs: dict[tuple[int, str], Attempts],
     offsets: np.ndarray | None,
     specs: list[CircularSocket] | None = None,
-) -> dict:
+    pins: ElasticPins | None = None,
+) -> tuple[dict, dict]:
     """Advance every run by one attempt per round, all of a round's pushes in one batch
-    (workpiece ``k``: ``SOCKET`` with ``offsets[k]``, or ``specs[k]``)."""
+    (workpiece ``k``: ``SOCKET`` with ``offsets[k]``, or ``specs[k]``); each run's result
+    and whether it left its part damaged. With ``pins`` that bend every run has a slot of
+    its own, where each attempt meets the part as the run's last one left it."""
     from tolins.inference.physics import AttemptBatch
 
     layout = SOCKET  # a kind's own workpiece layout (a plug, burrs) for ``specs``
@@ -425,8 +471,10 @@ def _lockstep_physics(
         specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]
     else:
         layout = specs[0]
-    batch = AttemptBatch(layout, slots=min(64, len(runs)), num_threads=1)
-    results, pending = {}, {}
+    slots = len(runs) if pins is not None else min(64, len(runs))
+    batch = AttemptBatch(layout, slots=slots, num_threads=1, pins=pins)
+    slot = {key: i for i, key in enumerate(runs)}
+    results, pending, tried = {}, {}, set()
     for key, run in runs.items():
         try:
             pending[key] = next(run)
@@ -435,16 +483,26 @@ def _lockstep_physics(
     try:
         while pending:
             keys = list(pending)
-            outcomes = batch.attempts([(specs[key[0]], pending[key]) for key in keys])
+            jobs = [(specs[key[0]], pending[key]) for key in keys]
+            if pins is None:
+                outcomes = batch.attempts(jobs)
+            else:
+                keep = [key in tried for key in keys]
+                outcomes = batch.attempts(jobs, slots=[slot[k] for k in keys], keep_part=keep)
+                tried.update(keys)
             for key, (_, blocked, bearings) in zip(keys, outcomes, strict=True):
                 try:
                     pending[key] = runs[key].send((~blocked, bearings))
                 except StopIteration as stop:
                     results[key] = stop.value
                     del pending[key]
+        damaged = {
+            key: pins is not None and bent_beyond(batch.bend(slot[key]), pins.damage_threshold)
+            for key in runs
+        }
     finally:
         batch.close()
-    return results
+    return results, damaged
 
 
 def _method_rng(seed: int, index: int, method: str) -> np.random.Generator:

@@ -24,11 +24,15 @@ PLOT = "inference_study.png"
 
 def study_stage(settings: StudyConfig) -> Stage[StudyConfig]:
     """The study's stage. Its config: the study's settings but its workers (the results
-    do not depend on them) and the tolins version."""
+    do not depend on them; nor the pins' settings when they are rigid) and the tolins
+    version."""
     import tolins
 
     config = {**asdict(settings), "tolins_version": tolins.__version__}
     config.pop("workers")
+    if settings.pins == "rigid":  # the study's key from before pins could bend
+        config.pop("pins")
+        config.pop("pin_material")
     return Stage(NAME, config, settings)
 
 

@@ -39,13 +39,18 @@ def format_delicate_section(delicate: dict[str, Any] | None) -> list[str]:
         return []
     seeds, count = delicate["seeds"], delicate["episodes_per_seed"]
     over = f"the {seeds} training seeds" if seeds > 1 else "the episodes of the one seed"
-    ids = ", ".join(f"`{c['env_id']}`" for c in delicate["conditions"])
+    ids = ", ".join(
+        f"`{c['env_id']}`" + (f" with `pins={c['pins']!r}`" if c.get("pins") else "")
+        for c in delicate["conditions"]
+    )
     note = (
-        f"The 2*2 circle's policies, trained on rigid pins, on the same workpiece with pins "
-        f"that bend and stay bent ({ids}: phosphor bronze, damaged beyond half the radial "
+        f"The 2*2 circle's policies, trained on rigid pins, on workpieces with pins that "
+        f"bend and stay bent ({ids}: phosphor bronze, damaged beyond half the radial "
         f"clearance; docs/delicate.md), {count} episode{'s' if count > 1 else ''} per cell "
         f"and training seed (the rows' evaluation seeds); rates [95 % CI over {over}]. "
-        "Success is the paper's (every pin in its hole, bent ones included)."
+        "Success is the paper's (every pin in its hole, bent ones included). On the bent-pin "
+        "2*1 of rows C4, π_φ* re-plans after each blocked attempt, each attempt meeting the "
+        "part as the last one left it."
     )
     claim = delicate["claim"]
     lines = [

@@ -1,11 +1,14 @@
 """The delicate-pins table of ``tolins bench`` (beyond the paper): the 2*2's policies on
-the same workpiece with pins that bend and stay bent (docs/delicate.md).
+the same workpiece with pins that bend and stay bent, and on Table 1's bent-pin 2*1
+(docs/delicate.md).
 
 The lines are the Panda table's (:data:`~tolins.bench.table.robot.ROBOT_POLICIES`: the
 experts, π_bc, π_n, π_φ and π_φ*, trained on rigid pins); the columns
 (:data:`CONDITIONS`) the paper's 2*2 at 200 µm and its 50 µm grade with
 ``pins="elastic-plastic"`` (phosphor bronze, a pin damaged beyond half the radial
-clearance). Its cells are the robustness table's
+clearance), and the C4 rows' bent-pin 2*1 with those pins, where π_φ* re-plans after each
+blocked attempt (as in row C4.2) and each attempt meets the part as the last one left it.
+Its cells are the robustness table's
 (:func:`~tolins.bench.table.robustness.robustness_table`) with the damage figures of
 :func:`~tolins.bench.table.results.damage_figures` (the share of damaged parts and of
 successes without damage, 95 % CIs over training seeds); its stages
@@ -17,6 +20,7 @@ pins cannot bend.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from tolins.bench.table.claims import HELD, INCONCLUSIVE, NO_DIFFERENCE, NOT_HELD
@@ -28,10 +32,27 @@ from tolins.geometry.specs import GRADES_UM
 
 #: ``results.json``'s key of the table.
 KEY = "delicate"
-#: The columns: the paper's 2*2 and its 50 µm grade, with pins that bend.
+
+
+@dataclass(frozen=True)
+class BendingCondition(Condition):
+    """A column on a workpiece whose id has rigid pins, with ``pins`` given to it."""
+
+    pins: str = "elastic-plastic"
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        return {**super().env_kwargs, "pins": self.pins}
+
+
+#: The columns: the paper's 2*2, its 50 µm grade and the bent-pin 2*1 (C4), with pins that
+#: bend.
 CONDITIONS: tuple[Condition, ...] = (
     Condition("delicate", "2*2", "delicate", bench_id("Circle2x2Delicate"), GRADES_UM[0]),
     Condition("delicate_fit50", "2*2 at 50 µm", "delicate", bench_id("Circle2x2Fit50Delicate"), 50),
+    BendingCondition(
+        "delicate_c4", "bent-pin 2*1 (C4)", "delicate", bench_id("Circle2x1Defective"), GRADES_UM[0]
+    ),
 )
 #: The table.
 DELICATE = ConditionTable(KEY, "delicate-", ROBOT_POLICIES, CONDITIONS)

@@ -24,7 +24,7 @@ def _config(out, **kwargs) -> BenchConfig:
 def test_the_bench_evaluates_its_policies_on_delicate_pins(tmp_path) -> None:
     run = run_bench(_config(tmp_path), progress=False, log=lambda _: None)
     table = run.delicate
-    columns = ["delicate", "delicate_fit50", "delicate_c4"]
+    columns = ["delicate", "delicate_fit50", "delicate_2x4", "delicate_c4"]
     assert [c["id"] for c in table["conditions"]] == columns
     assert [p["id"] for p in table["policies"]] == ["safe", "efficient"]  # nothing trained
     for policy in ("safe", "efficient"):

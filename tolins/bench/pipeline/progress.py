@@ -60,16 +60,17 @@ TABLES: dict[str, ConditionTable] = {
 #: kind of work on the MuJoCo backend's ``-v2`` physics, two stages side by side on 2
 #: cores: the quick bench of an idle fresh clone (2026-12-04, 7.7 min; benchmarks/README.md,
 #: "``tolins bench`` wall time"), each kind's measured stage time over its budget, the
-#: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03) and two
-#: quick benches on a loaded 2-core Zen 4 VM (2026-12-07; benchmarks/README.md, "How
-#: well the progress bar foresees the time left"); the deep-RL baselines' from the
-#: ``-v2`` paper run's trainings (PPO 280 s and SAC 1,440 s for 288,000 env steps, two
-#: side by side).
+#: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03) and quick
+#: benches on a 2-core Zen 4 VM (2026-12-07; benchmarks/README.md, "How well the progress
+#: bar foresees the time left"): the Panda's with its compiled law and the delicate
+#: table's from the idle one; the deep-RL baselines' from the ``-v2`` paper run's
+#: trainings (PPO 280 s and SAC 1,440 s for 288,000 env steps, two side by side).
 STEP_SECONDS = {
     "demo-rollout": 0.65e-3,  # a demonstration episode's step
     "eval-rollout": 0.4e-3,  # an evaluation episode's step
     "robust-rollout": 1.95e-3,  # a robustness episode's (finer grades step finer)
-    "panda-rollout": 17e-3,  # a step of the Panda's table
+    "delicate-rollout": 2.25e-3,  # ... with pins that bend
+    "panda-rollout": 4.5e-3,  # a step of the Panda's table (its law compiled)
     "rs-gail-safe": 0.6e-3,  # π_n imitating the safe expert
     "rs-gail-efficient": 2.1e-3,  # ... the efficient one: its failing candidates in contact
     "tolerance-guided": 0.41e-3,
@@ -79,8 +80,11 @@ STEP_SECONDS = {
     "study": 0.14,  # per workpiece, MuJoCo contact outcomes
     "study-model": 0.01,  # per workpiece, the tolerance model's outcomes (kinematic)
 }
-#: An inference-wrapped policy (π_φ*) costs this many times its policy's episodes.
-INFERENCE_FACTOR = 3.0
+#: An inference-wrapped policy (π_φ*) costs this many times its policy's episodes: in a
+#: table's episodes, where it re-plans on a blocked attempt; on the Panda, whose step
+#: costs more than the goal searches; on the bent-pin 2*1 of row C4.2, which blocks
+#: attempt after attempt.
+INFERENCE_FACTORS = {"table": 3.0, "robot": 2.0, "evaluation": 9.0}
 #: A step of the kinematic backend costs this fraction of MuJoCo's.
 KINEMATIC_FACTOR = 0.4
 #: What a stage costs besides its budget (imports, setup, files).
@@ -139,13 +143,17 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
         return config.samples + (len(config.kinds) - 1) * config.kind_samples, "study"
     if kind == "evaluation" and name == TRAJECTORIES:
         return (TRAJECTORY_EPISODES + 1) * HORIZON, "eval-rollout"
-    factor = INFERENCE_FACTOR if _with_inference(name, kind) else 1.0
+    factor = 1.0
+    if _with_inference(name, kind):
+        factor = INFERENCE_FACTORS.get(kind, INFERENCE_FACTORS["table"])
     if kind == "evaluation":
         return profile.eval_episodes * HORIZON * factor, "eval-rollout"
     if kind in TABLES:
         table = TABLES[kind]
         episodes = profile.robustness_episodes * len(table.conditions)
-        unit = "panda-rollout" if kind == "robot" else "robust-rollout"
+        unit = {"robot": "panda-rollout", "delicate": "delicate-rollout"}.get(
+            kind, "robust-rollout"
+        )
         return episodes * HORIZON * factor, unit
     training = TRAININGS.get(base)
     if training is None:

@@ -1,10 +1,10 @@
 """The delicate-pins table of ``tolins bench`` (beyond the paper): the 2*2's policies on
-the same workpiece with pins that bend and stay bent, and on Table 1's bent-pin 2*1
+the evaluation workpieces of Table 1's circle rows with pins that bend and stay bent
 (docs/delicate.md).
 
 The lines are the Panda table's (:data:`~tolins.bench.table.robot.ROBOT_POLICIES`: the
 experts, π_bc, π_n, π_φ and π_φ*, trained on rigid pins); the columns
-(:data:`CONDITIONS`) the paper's 2*2 at 200 µm and its 50 µm grade with
+(:data:`CONDITIONS`) the paper's 2*2 at 200 µm, its 50 µm grade and the 2*4 with
 ``pins="elastic-plastic"`` (phosphor bronze, a pin damaged beyond half the radial
 clearance), and the C4 rows' bent-pin 2*1 with those pins, where π_φ* re-plans after each
 blocked attempt (as in row C4.2) and each attempt meets the part as the last one left it.
@@ -45,11 +45,12 @@ class BendingCondition(Condition):
         return {**super().env_kwargs, "pins": self.pins}
 
 
-#: The columns: the paper's 2*2, its 50 µm grade and the bent-pin 2*1 (C4), with pins that
-#: bend.
+#: The columns: the evaluation workpieces of the circle rows, the 2*2 (C1, C2), the 2*4
+#: (C3) and the bent-pin 2*1 (C4), and the 2*2's 50 µm grade, with pins that bend.
 CONDITIONS: tuple[Condition, ...] = (
     Condition("delicate", "2*2", "delicate", bench_id("Circle2x2Delicate"), GRADES_UM[0]),
     Condition("delicate_fit50", "2*2 at 50 µm", "delicate", bench_id("Circle2x2Fit50Delicate"), 50),
+    Condition("delicate_2x4", "2*4 (C3)", "delicate", bench_id("Circle2x4Delicate"), GRADES_UM[0]),
     BendingCondition(
         "delicate_c4", "bent-pin 2*1 (C4)", "delicate", bench_id("Circle2x1Defective"), GRADES_UM[0]
     ),

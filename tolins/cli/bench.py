@@ -104,8 +104,10 @@ def run(args: argparse.Namespace) -> int:
 
 def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
     """``tolins bench --dry-run``'s report: per kind of stage, how many are finished, how
-    many to run and their expected work, and that work spread over ``config.workers``."""
-    from tolins.bench.pipeline.progress import KINDS, format_duration, stage_kind
+    many to run and their expected work, and how long that work takes on
+    ``config.workers`` run as the executors run it (its dependencies, the costliest chain
+    first: :func:`~tolins.bench.pipeline.progress.schedule_length`)."""
+    from tolins.bench.pipeline.progress import KINDS, format_duration, schedule_length, stage_kind
 
     def work(of: list[PlannedStage]) -> float:
         return sum(stage.expected_s for stage in of)
@@ -127,10 +129,14 @@ def format_plan(stages: list[PlannedStage], config: BenchConfig) -> str:
     total = work(todo)
     lines.append(f"| all | {len(stages) - len(todo)} | {len(todo)} | {format_duration(total)} |")
     place = "cores" if config.executor == "local" else "Ray CPUs"
+    expected = {stage.name: stage.expected_s for stage in todo}
+    needs = {stage.name: stage.needs for stage in todo}
+    wall = schedule_length(needs, expected, expected, (), config.workers)
     lines += [
         "",
-        f"About {format_duration(total / config.workers)} on {config.workers} {place} "
-        "(--workers): each stage's budget at the speed per env step of an idle quick "
-        "bench on 2 cores (tolins.bench.pipeline.progress.STEP_SECONDS). Nothing was run.",
+        f"About {format_duration(wall)} on {config.workers} {place} (--workers), the "
+        "stages run as the executor orders them: each stage's budget at the speed per env "
+        "step of an idle quick bench on 2 cores (tolins.bench.pipeline.progress."
+        "STEP_SECONDS). Nothing was run.",
     ]
     return "\n".join(lines)

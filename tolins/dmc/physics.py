@@ -125,13 +125,10 @@ class InsertionPhysics(dm_mujoco.Physics):
             self._nominal_of, self._nominal = model, nominal_fields(model)
         apply_draw(model, self._nominal, draw or PhysicsDraw())
 
-    def set_pose(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
+    def set_pose(self, pose: np.ndarray) -> BackendState:
         """Reset the data and place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest
-        (with ``keep_part``, elastic-plastic pins as bent as they are)."""
-        if keep_part:
-            self.last_state = self.stepper.reset(pose, keep_part)
-        else:
-            self.last_state = self.stepper.reset(pose)
+        (elastic-plastic pins straight)."""
+        self.last_state = self.stepper.reset(pose)
         return self.last_state
 
     def command(self, velocity: np.ndarray) -> None:

@@ -304,10 +304,7 @@ class InsertionEnv(gym.Env, SettingsAttributes):
             self._close_renderer()  # it draws the previous workpiece's model
         plan.apply_physics(self.backend.set_physics)
         plan.apply_grasp(lambda grasp: self.backend.set_grasp(grasp))
-        if plan.keep_part:
-            state = self.backend.reset(plan.pose, keep_part=True)
-        else:
-            state = self.backend.reset(plan.pose)
+        state = self.backend.reset(plan.pose, keep_part=plan.keep_part)
         return self._episode.begin(plan, state, self.np_random)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

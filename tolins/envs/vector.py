@@ -327,10 +327,7 @@ class InsertionVectorEnv(gym.vector.VectorEnv):
             plan.apply_grasp(lambda grasp, i=i: self.physics.set_grasp(i, grasp))
         poses = np.array([plan.pose for plan in plans])
         keep = np.array([plan.keep_part for plan in plans], dtype=bool)
-        if keep.any():
-            state = self.physics.reset(ids, poses, keep_part=keep)
-        else:
-            state = self.physics.reset(ids, poses)
+        state = self.physics.reset(ids, poses, keep_part=keep)
         observations, infos = np.zeros((self.num_envs, 8)), []
         for k, (i, plan) in enumerate(zip(ids, plans, strict=True)):
             row = state.row(k)

@@ -249,9 +249,11 @@ class KinematicBatch(Capabilities):
         """The current poses ``(num_envs, 4)`` (a copy)."""
         return self._pose.copy()
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         """Place workpiece ``ids[k]`` at ``poses[k]``; ``ValueError`` if one is inside the
-        board."""
+        board (``keep_part``: nothing to keep, its pins do not bend)."""
         ids = np.asarray(ids, dtype=np.intp)
         poses = np.asarray(poses, dtype=float)
         for row, i in enumerate(ids.tolist()):
@@ -326,7 +328,7 @@ class KinematicBackend(Capabilities):
     def set_physics(self, draw: object) -> None:
         """Nothing: the kinematic model has no friction, stiffness or servos."""
 
-    def reset(self, pose: np.ndarray) -> BackendState:
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
         return self._batch.reset(_ONE, np.reshape(pose, (1, 4))).row(0)
 
     def step(self, velocity: np.ndarray) -> BackendState:

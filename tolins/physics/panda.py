@@ -262,7 +262,9 @@ class PandaSimulations:
         # Threads and the law's bindings to the datas' memory are this process's own.
         return {**self.__dict__, "_pool": None, "_inputs": [None] * len(self.datas)}
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error) and close
         the fingers on it: the state then. One simulation after another: the fingers close
         with gravity off in the model, which simulations may share."""
@@ -502,7 +504,9 @@ class PandaBatch(Capabilities):
         the grip frame) from its next reset on."""
         self.sims.grasp[index] = offset
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         return self.sims.reset(np.asarray(ids, dtype=np.intp), np.asarray(poses, dtype=float))
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
@@ -560,7 +564,7 @@ class PandaBackend(Capabilities):
         """As :meth:`PandaBatch.set_grasp`."""
         self._batch.set_grasp(0, offset)
 
-    def reset(self, pose: np.ndarray) -> BackendState:
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
         return self._batch.reset(_ONE, np.reshape(pose, (1, 4))).row(0)
 
     def step(self, velocity: np.ndarray) -> BackendState:
@@ -600,7 +604,7 @@ class PandaStepper:
         """The law's gains from the next step on (``None``: the arm's own)."""
         self._sims.gains[0] = gains or self.arm.gains
 
-    def reset(self, pose: np.ndarray) -> BackendState:
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
         """Grasp the part at ``pose`` ``[x, y, theta, z]`` (as :meth:`PandaSimulations.reset`)."""
         return self._sims.reset(_ONE, np.reshape(np.asarray(pose, dtype=float), (1, 4))).row(0)
 

@@ -136,8 +136,10 @@ class Backend(Protocol):
     def set_physics(self, draw: PhysicsDraw | None) -> None:
         """Apply a randomised-physics ``draw`` (``None``: nominal) before the next reset."""
 
-    def reset(self, pose: np.ndarray) -> BackendState:
-        """Place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest."""
+    def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
+        """Place the workpiece at ``pose`` ``[x, y, theta, z]`` at rest; with ``keep_part``
+        its pins as bent as they are (only a class that ``supports_elastic_pins`` is given
+        ``True``: the settings refuse it elsewhere)."""
 
     def step(self, velocity: np.ndarray) -> BackendState:
         """Command ``velocity`` ``[ux, uy, utheta, uz]`` for one control period."""
@@ -152,9 +154,12 @@ class BatchPhysics(Protocol):
         """Simulate ``socket`` (a workpiece of the batch's family) in simulation ``index``
         from its next reset on."""
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         """Place simulation ``ids[k]``'s workpiece at ``poses[k]`` ``[x, y, theta, z]`` at
-        rest (``poses``: ``(len(ids), 4)``)."""
+        rest (``poses``: ``(len(ids), 4)``); ``keep_part[k]``: its pins as bent as they are
+        (as :meth:`Backend.reset`; ``None``: none kept)."""
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         """Command ``velocities[k]`` ``[ux, uy, utheta, uz]`` to simulation ``ids[k]`` for

@@ -204,7 +204,9 @@ class WarpBatch(Capabilities):
             array.assign(rows)
         self._sockets[index] = socket
 
-    def reset(self, ids: np.ndarray, poses: np.ndarray) -> BatchState:
+    def reset(
+        self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
+    ) -> BatchState:
         wp, mjw = self._wp, self._mjw
         ids = np.asarray(ids, dtype=np.intp)
         mask = np.zeros(self.num_envs, dtype=bool)

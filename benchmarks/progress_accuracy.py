@@ -34,7 +34,7 @@ from pathlib import Path
 from tolins.bench.pipeline.config import BenchConfig
 from tolins.bench.pipeline.profiles import PROFILES
 from tolins.bench.pipeline.progress import estimate_remaining, expected_cost
-from tolins.bench.pipeline.runner import plan_bench
+from tolins.bench.pipeline.runner import plan_bench, study_workers
 
 
 def logged(folder: Path) -> list[tuple[float, float | None]]:
@@ -56,7 +56,8 @@ def replayed(folder: Path) -> list[tuple[float, float | None]]:
         plan = plan_bench(BenchConfig(**config, out=empty))
     needs = {stage.name: stage.needs for stage in plan}
     profile = PROFILES[record["config"]["profile"]]
-    expected = {n: expected_cost(n, profile, record["config"]["backend"]) for n in stages}
+    workers = study_workers(record["config"].get("executor", "local"))
+    expected = {n: expected_cost(n, profile, record["config"]["backend"], workers) for n in stages}
     ran = {n: s for n, s in stages.items() if not s["cached"]}
     here = socket.gethostname()
     cached = {n: s["wall_s"] for n, s in stages.items() if s["cached"] and s["host"] == here}

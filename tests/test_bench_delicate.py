@@ -34,12 +34,15 @@ def test_the_bench_evaluates_its_policies_on_delicate_pins(tmp_path) -> None:
             assert cell["success_undamaged_mean"] <= cell["success_mean"]
             assert len(cell["damage_ci"]) == 2 and cell["damage_per_episode"]
     assert table["claim"]["verdict"] in (HELD, NOT_HELD, NO_DIFFERENCE, INCONCLUSIVE)
+    assert list(table["claim_by_condition"]) == columns
+    assert table["claim_by_condition"]["delicate"] == table["claim"]
     assert table["gentlest"] is None  # no learned policy ran
     written = json.loads((tmp_path / "results.json").read_text())
     assert written["delicate"]["claim"] == table["claim"]
     markdown = (tmp_path / "results.md").read_text()
     assert "## Delicate pins (beyond the paper)" in markdown
     assert "`tolins/Circle2x1Defective-v2` with `pins='elastic-plastic'`" in markdown
+    assert "The same claim on each workpiece: 2*2: " in markdown
     stages = sorted(p.name.rsplit("-", 1)[0] for p in (tmp_path / "stages").glob("delicate-*"))
     assert stages == ["delicate-efficient-seed0", "delicate-safe-seed0"]
     stage = next((tmp_path / "stages").glob("delicate-safe-*"))

@@ -91,6 +91,9 @@ KINEMATIC_FACTOR = 0.4
 STAGE_SECONDS = 0.5
 #: What the inference study costs besides its workpieces (starting its processes).
 STUDY_SECONDS = 5.0
+#: The processes the study ran on where its cost per workpiece was measured (the local
+#: executor's; a Ray task runs it on one).
+STUDY_WORKERS = 2
 #: The expected cost (s) the finished stages must hold before the time left is estimated.
 MIN_SEEN_S = 10.0
 #: The share of a group's (a class's) expected cost that its finished stages must hold to
@@ -121,12 +124,17 @@ def stage_kind(name: str) -> str:
     return "study" if name == study.NAME else "training"
 
 
-def expected_cost(name: str, profile: Profile, backend: str) -> float:
+def expected_cost(
+    name: str, profile: Profile, backend: str, study_workers: int = STUDY_WORKERS
+) -> float:
     """The expected wall time (s) of the stage ``name`` under ``profile`` on ``backend``
-    (a name the bench does not make costs :data:`STAGE_SECONDS`)."""
+    (a name the bench does not make costs :data:`STAGE_SECONDS`), the study on
+    ``study_workers`` processes."""
     steps, per_step = _budget(name, stage_kind(name), profile, backend)
-    if per_step == "study" and backend == "kinematic":
-        per_step = "study-model"
+    if per_step == "study":
+        steps *= STUDY_WORKERS / study_workers
+        if backend == "kinematic":
+            per_step = "study-model"
     elif per_step != "bc" and backend == "kinematic":
         steps *= KINEMATIC_FACTOR
     fixed = STUDY_SECONDS if per_step.startswith("study") else STAGE_SECONDS

@@ -13,6 +13,15 @@ def _figure(entry: dict[str, Any], name: str) -> str:
     return f"{entry[f'{name}_mean']:.2f} [{low:.2f}, {high:.2f}]"
 
 
+def _verdict(claim: dict[str, Any]) -> str:
+    """A claim's verdict with its difference, e.g. ``inconclusive (−0.17 [−0.33, +0.00])``."""
+    if "difference" not in claim:
+        return claim["verdict"]
+    d = claim["difference"]
+    low, high = d["ci"]
+    return f"{claim['verdict']} ({d['estimate']:+.2f} [{low:+.2f}, {high:+.2f}])"
+
+
 def format_delicate_table(delicate: dict[str, Any]) -> str:
     """Per policy (rows) and workpiece (column groups): the success rate, the damage rate
     and the rate of successes without damage, each with its 95 % CI."""
@@ -69,6 +78,15 @@ def format_delicate_section(delicate: dict[str, Any] | None) -> list[str]:
             f" (efficient − safe damage rate {d['estimate']:+.2f} [{low:+.2f}, {high:+.2f}] "
             f"over {d['n']} {d['over']}; no practical difference within ±{claim['delta']:g})."
         )
+    by_condition = delicate.get("claim_by_condition")
+    if by_condition:
+        labels = {c["id"]: c["label"] for c in delicate["conditions"]}
+        lines += [
+            "",
+            "The same claim on each workpiece: "
+            + "; ".join(f"{labels[c]}: {_verdict(v)}" for c, v in by_condition.items())
+            + ".",
+        ]
     gentle = delicate.get("gentlest")
     if gentle is not None:
         lines += [

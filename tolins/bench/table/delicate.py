@@ -121,8 +121,15 @@ def gentlest(table: dict[str, Any]) -> dict[str, Any] | None:
 
 
 def with_verdicts(table: dict[str, Any] | None) -> dict[str, Any] | None:
-    """``table`` with its ``claim`` (:func:`damage_claim`, on the paper's 2*2) and
-    ``gentlest`` (:func:`gentlest`) (``None`` stays ``None``)."""
+    """``table`` with its ``claim`` (:func:`damage_claim`, on the paper's 2*2), the same
+    claim on each column (``claim_by_condition``) and ``gentlest`` (:func:`gentlest`)
+    (``None`` stays ``None``)."""
     if table is None:
         return None
-    return {**table, "claim": damage_claim(table), "gentlest": gentlest(table)}
+    by_condition = {c["id"]: damage_claim(table, c["id"]) for c in table["conditions"]}
+    return {
+        **table,
+        "claim": damage_claim(table),
+        "claim_by_condition": by_condition,
+        "gentlest": gentlest(table),
+    }

@@ -82,6 +82,8 @@ ONE_SEED_MARGIN = one_seed_margin(2)
 FIGURES = ("reward", "success", "steps", "collisions")
 
 _LOCK = threading.Lock()
+#: The sample pairs :func:`improvement_of_batch` compares at once (a few MB of booleans).
+_PAIRS_AT_ONCE = 2**22
 
 
 @dataclass(frozen=True)
@@ -132,9 +134,14 @@ def improvement(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def improvement_of_batch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """:func:`improvement` of each pair of rows of ``x`` and ``y`` (batch × samples)."""
-    a, b = x[:, :, None], y[:, None, :]
-    return np.mean(a > b, axis=(1, 2)) + 0.5 * np.mean(a == b, axis=(1, 2))
+    """:func:`improvement` of each pair of rows of ``x`` and ``y`` (batch × samples), a few
+    rows at a time (each compares every sample of x with every one of y)."""
+    rows = max(1, _PAIRS_AT_ONCE // (x.shape[1] * y.shape[1]))
+    parts = []
+    for first in range(0, len(x), rows):
+        a, b = x[first : first + rows, :, None], y[first : first + rows, None, :]
+        parts.append(np.mean(a > b, axis=(1, 2)) + 0.5 * np.mean(a == b, axis=(1, 2)))
+    return np.concatenate(parts)
 
 
 def iqm_of_batch(x: np.ndarray) -> np.ndarray:

@@ -9,7 +9,6 @@ import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 
-from tolins.envs.task_settings import ELASTIC_PINS_ON
 from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.paper import CONTROL_DT
@@ -17,7 +16,7 @@ from tolins.physics.compiled import compile_model
 from tolins.physics.panda import PandaStepper, compile_panda_world, default_gains, split_draw
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
-from tolins.physics.registry import check_robot
+from tolins.physics.registry import check_elastic_pins, check_robot, simulator
 from tolins.physics.servo import ServoStepper
 from tolins.physics.versions import VERSIONS, PhysicsVersion, check_version_robot
 from tolins.physics.versions import physics_version as physics_version_of
@@ -92,8 +91,10 @@ class InsertionPhysics(dm_mujoco.Physics):
             return ROBOT_PHYSICS[robot].from_spec(spec, physics_version, robot, pins)
         version = physics_version_of(physics_version)
         check_version_robot(version, robot)
-        if pins is not None and cls.robot != "free":
-            raise ValueError(f"pins='elastic-plastic' with robot={robot!r}; {ELASTIC_PINS_ON}")
+        if pins is not None:
+            check_elastic_pins(
+                simulator("mujoco", single=True, robot=robot).single, f"robot={robot!r}"
+            )
         physics = cls.from_model(cls.compile(spec, version, pins))
         if version is not physics.version or pins is not None:
             physics.version, physics.pins = version, pins

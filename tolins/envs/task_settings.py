@@ -30,7 +30,7 @@ from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics.panda import check_gain_range
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
-from tolins.physics.registry import check_robot, simulator, taking_defect
+from tolins.physics.registry import check_elastic_pins, check_robot, simulator, taking_defect
 from tolins.physics.schedule import check_control_dt
 from tolins.physics.versions import PhysicsVersion, check_version_robot, physics_version
 
@@ -258,11 +258,8 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
     cls = chosen.single if single else chosen.batch
     robot = "" if settings.robot == "free" else f", robot={settings.robot!r}"
     on = f"backend={backend!r}{robot}"
-    if settings.elastic is not None and not cls.supports_elastic_pins:
-        where = "" if single else " in the vector env"
-        raise ValueError(
-            f"pins='elastic-plastic' is not supported on {on}{where}; {ELASTIC_PINS_ON}"
-        )
+    if settings.elastic is not None:
+        check_elastic_pins(cls, on if single else f"{on} in the vector env")
     if settings.randomization is not None and not cls.supports_randomization:
         raise ValueError(f"randomization is not supported on {on}")
     kind = None if settings.defects is None else settings.defects[0]
@@ -277,14 +274,6 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
             f"defects={settings.defects!r} is not supported on {on}; allowed: "
             f"the single env, or backend {', '.join(map(repr, supported))}"
         )
-
-
-#: Where ``pins="elastic-plastic"`` runs, and why not elsewhere.
-ELASTIC_PINS_ON = (
-    "allowed: backend='mujoco' with robot='free' (the single env, the vector env and "
-    "dm_control; the kinematic and Warp simulators have no bending pins, the Panda's stepper "
-    "does not run the pins' return mapping yet)"
-)
 
 
 #: The keywords of :class:`TaskSettings` an env takes besides its socket.

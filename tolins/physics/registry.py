@@ -107,6 +107,22 @@ def taking_defect(kind: str) -> tuple[str, ...]:
     return tuple(name for name, s in SIMULATORS.items() if kind in s.batch.defect_kinds)
 
 
+#: Where pins that bend are simulated: the ``allowed`` of every refusal of them.
+ELASTIC_PINS_ON = (
+    "allowed: backend='mujoco' with robot='free' (the single env, the vector env and "
+    "dm_control; the kinematic and Warp simulators have no bending pins, the Panda's stepper "
+    "does not run the pins' return mapping yet)"
+)
+
+
+def check_elastic_pins(cls: type, on: str) -> None:
+    """``ValueError`` unless the simulator class ``cls`` simulates pins that bend (its
+    ``supports_elastic_pins``); ``on`` names where they were asked for, e.g.
+    ``backend='kinematic'``."""
+    if not cls.supports_elastic_pins:
+        raise ValueError(f"pins='elastic-plastic' is not supported on {on}; {ELASTIC_PINS_ON}")
+
+
 def make_backend(
     name: str,
     spec: SocketSpec,
@@ -122,9 +138,12 @@ def make_backend(
     chosen = simulator(name, single=True, robot=robot)
     if pins is None:
         return chosen.single(spec, control_dt, physics_version=physics_version)
-    if not chosen.single.supports_elastic_pins:
-        raise ValueError(f"pins='elastic-plastic' is not supported on backend={name!r}")
+    check_elastic_pins(chosen.single, _where(name, robot))
     return chosen.single(spec, control_dt, physics_version=physics_version, pins=pins)
+
+
+def _where(name: str, robot: str) -> str:
+    return f"backend={name!r}" + ("" if robot == "free" else f", robot={robot!r}")
 
 
 def make_batch(
@@ -154,7 +173,6 @@ def make_batch(
     given = {"num_threads": num_threads, "device": device, "persistent": persistent}
     options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
     if pins is not None:
-        if not cls.supports_elastic_pins:
-            raise ValueError(f"pins='elastic-plastic' is not supported on backend={name!r}")
+        check_elastic_pins(cls, f"{_where(name, robot)} in the vector env")
         options["pins"] = pins
     return cls(socket, num_envs, control_dt, physics_version=physics_version, **options)

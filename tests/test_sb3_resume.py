@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import pickle
 import shutil
@@ -210,6 +211,39 @@ def test_sigint_checkpoints_then_interrupts_and_the_stage_resumes(
     train_job(tmp_path, sac_stage, None, False, None)
     _assert_identical(_saved(folder), _saved(uninterrupted))
     assert _curve(folder) == _curve(uninterrupted)
+
+
+def test_a_stage_killed_after_training_before_its_record_trains_no_more(
+    sac_stage, uninterrupted, tmp_path, monkeypatch
+) -> None:
+    """Killed once the training has finished but before the stage's record is written, the
+    stage keeps the finished training's checkpoint: run again, it takes no env step and
+    ends with the uninterrupted weights; the record leaves the checkpoint out, which goes."""
+    from tolins.bench.store import cache
+
+    class Killed(BaseException):
+        pass
+
+    def killed(*_args, **_kwargs):
+        raise Killed
+
+    monkeypatch.setattr(cache, "atomic_json", killed)
+    with pytest.raises(Killed):
+        train_job(tmp_path, sac_stage, None, False, None)
+    monkeypatch.undo()
+    folder = _folder(tmp_path, sac_stage)
+    assert _steps(folder / CHECKPOINT) == BUDGET["env_steps"] and not _finished(folder)
+
+    def learn(*_args, **_kwargs):
+        raise AssertionError("the finished training trained again")
+
+    monkeypatch.setattr(sb3._Run, "learn", learn)
+    train_job(tmp_path, sac_stage, None, False, None)
+    assert _finished(folder) and not (folder / CHECKPOINT).exists()
+    _assert_identical(_saved(folder), _saved(uninterrupted))
+    assert _curve(folder) == _curve(uninterrupted)
+    assert CHECKPOINT not in json.loads((folder / MARKER).read_text())["files"]
+    assert StageCache(tmp_path).problem(folder) is None
 
 
 def test_the_checkpoint_interval_is_not_part_of_the_stage(sac_stage) -> None:

@@ -18,6 +18,7 @@ from tolins.bench.jobs.demonstrations import DemoSpec, dataset_folder
 from tolins.bench.store.cache import Stage, StageCache, stage_key
 from tolins.bench.store.integrity import stage_file
 from tolins.bench.table.rows import SB3_METHODS, Training, seeded
+from tolins.learning.agents.sb3_config import CHECKPOINT as SB3_CHECKPOINT
 
 if TYPE_CHECKING:
     from tolins.learning.agents.sb3_config import Sb3Config
@@ -124,8 +125,11 @@ def train_job(
     policy file. The folders of its demonstration stages, when they ran as jobs before
     it, come last (unused: the stage names them)."""
     cache = StageCache(root)
+    # a deep-RL training's checkpoint stays until the stage is recorded: a run killed in
+    # between resumes from the finished training instead of training again
+    transient = (SB3_CHECKPOINT,) if stage.spec.sb3 is not None else ()
     folder = cache.run_stage(
-        stage, lambda out: _train(cache, stage.spec, out, upstream, pool, progress)
+        stage, lambda out: _train(cache, stage.spec, out, upstream, pool, progress), transient
     )
     return folder / policy_file(stage.spec.training)
 
@@ -144,7 +148,8 @@ def _train(
     if spec.sb3 is not None:
         from tolins.learning.agents.sb3 import train_sb3
 
-        train_sb3(spec.sb3, out, resume=True)  # from its checkpoint, if it was interrupted
+        # from its checkpoint, if it was interrupted; the stage cache removes it
+        train_sb3(spec.sb3, out, resume=True, keep_checkpoint=True)
         return
     env_ids = list(training.env_ids)
     demos = _demos(cache, spec.demos, out)

@@ -19,7 +19,7 @@ import json
 import os
 import socket
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Generic, TypeVar
@@ -74,16 +74,27 @@ class StageCache:
     def finished(self, name: str, config: Mapping[str, Any]) -> bool:
         return (self.folder(name, config) / MARKER).is_file()
 
-    def run_stage(self, stage: Stage[Any], build: Callable[[Path], object]) -> Path:
+    def run_stage(
+        self,
+        stage: Stage[Any],
+        build: Callable[[Path], object],
+        transient: Collection[str] = (),
+    ) -> Path:
         """The finished folder of the planned ``stage`` (:meth:`run` with its name and
         config)."""
-        return self.run(stage.name, stage.config, build)[0]
+        return self.run(stage.name, stage.config, build, transient)[0]
 
     def run(
-        self, name: str, config: Mapping[str, Any], build: Callable[[Path], object]
+        self,
+        name: str,
+        config: Mapping[str, Any],
+        build: Callable[[Path], object],
+        transient: Collection[str] = (),
     ) -> tuple[Path, bool]:
         """The finished folder of the stage and whether it was cached; ``build(folder)``
-        runs only when the stage has not finished before."""
+        runs only when the stage has not finished before. Files named in ``transient``
+        (a training's checkpoint) are what an interrupted ``build`` resumes from: they
+        stay until the stage's record is written, are not part of it, and go then."""
         folder = self.folder(name, config)
         if (folder / MARKER).is_file():
             return folder, True
@@ -91,7 +102,7 @@ class StageCache:
         began, started = time.perf_counter(), time.time()
         build(folder)
         record = {
-            "files": folder_digests(folder, skip=(MARKER,)),
+            "files": folder_digests(folder, skip=(MARKER, *transient)),
             "name": name,
             "config": dict(config),
             "wall_s": time.perf_counter() - began,
@@ -102,6 +113,8 @@ class StageCache:
             "pid": os.getpid(),
         }
         atomic_json(folder / MARKER, record, sort_keys=True)
+        for file in transient:
+            (folder / file).unlink(missing_ok=True)
         return folder, False
 
     def problem(self, folder: Path) -> str | None:

@@ -131,13 +131,16 @@ def train_sb3(
     out: str | Path,
     *,
     resume: bool = False,
+    keep_checkpoint: bool = False,
     log: Callable[[str], None] | None = None,
     **overrides,
 ) -> list[dict[str, float]]:
     """Train ``config`` into ``out`` (``model.zip``, ``curves.csv``); the curve's rows.
 
-    ``checkpoint.pt`` in ``out`` holds the training until it ends (module docstring);
-    with ``resume`` a training continues from it, else it is refused
+    ``checkpoint.pt`` in ``out`` holds the training until it ends (module docstring), or
+    with ``keep_checkpoint`` after it too, finished (for a caller that removes it once it
+    has recorded the training: the bench's stage cache); with ``resume`` a training
+    continues from it (a finished one only writes the model again), else it is refused
     (:class:`~tolins.learning.artefacts.RunRefused`, as are a checkpoint of another
     configuration and a training whose weights stop being finite). ``overrides``:
     keywords of the SB3 algorithm (for experiments)."""
@@ -157,10 +160,12 @@ def train_sb3(
                     f"{row['success']:.2f}, collisions {row['collisions']:.2f}"
                 )
         atomic_write(out / MODEL, model.save)
-        if signals.pending is not None:
+        if signals.pending is not None or keep_checkpoint:
             run.save()  # the finished training: a rerun only writes the model again
+        if signals.pending is not None:
             signals.deliver()
-    run.path.unlink(missing_ok=True)
+    if not keep_checkpoint:
+        run.path.unlink(missing_ok=True)
     return run.history
 
 

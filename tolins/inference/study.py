@@ -78,6 +78,9 @@ STUDY_KINDS = ("bent", "pitch", "burr", "blocked")
 KIND_SIGMAS = {"pitch": 0.02, "burr": 0.08, "blocked": None}
 #: The prior of the per-kind inference: bends, pitch error, burrs and a blocked hole.
 DEFECT_MODEL = DefectModel(SIGMA, pitch_sigma=0.02, burr_sigma=0.08, blocked_prior=0.1)
+#: With pins that bend, the runs simulated side by side, each in a simulation (a model
+#: copy and its data) of its own.
+PART_SLOTS = 192
 #: Paper's figures: fraction inserted within 10 attempts, mean attempts of those.
 PAPER = {"inference": (0.902, 1.836), "random": (0.782, 2.796)}
 
@@ -463,9 +466,18 @@ def _lockstep_physics(
     """Advance every run by one attempt per round, all of a round's pushes in one batch
     (workpiece ``k``: ``SOCKET`` with ``offsets[k]``, or ``specs[k]``); each run's result
     and whether it left its part damaged. With ``pins`` that bend every run has a slot of
-    its own, where each attempt meets the part as the run's last one left it."""
+    its own, where each attempt meets the part as the run's last one left it, and the runs
+    go :data:`PART_SLOTS` at a time (a simulation each; the results do not depend on it)."""
     from tolins.inference.physics import AttemptBatch
 
+    if pins is not None and len(runs) > PART_SLOTS:
+        keys, results, damaged = list(runs), {}, {}
+        for first in range(0, len(keys), PART_SLOTS):
+            group = {key: runs[key] for key in keys[first : first + PART_SLOTS]}
+            done, bent = _lockstep_physics(group, offsets, specs, pins)
+            results.update(done)
+            damaged.update(bent)
+        return results, damaged
     layout = SOCKET  # a kind's own workpiece layout (a plug, burrs) for ``specs``
     if specs is None:
         specs = [dataclasses.replace(SOCKET, pin_offsets=eps) for eps in offsets]

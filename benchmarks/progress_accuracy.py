@@ -56,7 +56,7 @@ def replayed(folder: Path) -> list[tuple[float, float | None]]:
         plan = plan_bench(BenchConfig(**config, out=empty))
     needs = {stage.name: stage.needs for stage in plan}
     profile = PROFILES[record["config"]["profile"]]
-    workers = study_workers(record["config"].get("executor", "local"))
+    workers = study_workers(record["config"].get("executor", "local") == "local")
     expected = {n: expected_cost(n, profile, record["config"]["backend"], workers) for n in stages}
     ran = {n: s for n, s in stages.items() if not s["cached"]}
     here = socket.gethostname()

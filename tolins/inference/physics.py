@@ -115,7 +115,7 @@ class AttemptBatch:
             physics.set_socket(k, spec)
         poses = [[*np.asarray(goal, dtype=float), start_height] for _, goal in chunk]
         ids = np.array(slots)
-        physics.reset(ids, np.array(poses), np.array(keep) if physics.elastic else None)
+        physics.reset(ids, np.array(poses), np.array(keep))
         push = np.array([0.0, 0.0, 0.0, -A_MAX[3]])
         done: dict[int, tuple[bool, np.ndarray, np.ndarray]] = {}
         active = list(range(len(chunk)))

@@ -251,9 +251,8 @@ class MujocoBatch(Capabilities):
         elastic-plastic pins as bent as they are)."""
         ids = np.asarray(ids, dtype=np.intp)
         self._sync_models()
-        if keep_part is None:
-            return self._servo.reset(ids, poses)
-        return self._servo.reset(ids, poses, np.asarray(keep_part, dtype=bool))
+        keep = None if keep_part is None else np.asarray(keep_part, dtype=bool)
+        return self._servo.reset(ids, poses, keep)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         ids = np.asarray(ids, dtype=np.intp)

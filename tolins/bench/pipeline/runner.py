@@ -75,10 +75,10 @@ def run_bench(
         return _run_bench(config, progress=progress, log=log)
 
 
-def study_workers(executor: str) -> int:
-    """The processes the study runs on under ``executor``: 2 locally (beside the other
+def study_workers(local: bool) -> int:
+    """The processes the study runs on: 2 under the ``local`` executor (beside the other
     stages' threads), 1 as a Ray task (one CPU)."""
-    return 2 if executor == "local" else 1
+    return 2 if local else 1
 
 
 def plan_bench(config: BenchConfig) -> list[PlannedStage]:
@@ -89,7 +89,7 @@ def plan_bench(config: BenchConfig) -> list[PlannedStage]:
     profile = PROFILES[config.profile]
     plan = Plan(StageCache(Path(config.out)), log=lambda _: None, dry_run=True)
     _plan_stages(plan, config, None, local=config.executor == "local", inner_bars=False)
-    workers = study_workers(config.executor)
+    workers = study_workers(config.executor == "local")
     cost = {name: expected_cost(name, profile, config.backend, workers) for name in plan.stages}
     return [PlannedStage(name, True, cost[name]) for name in plan.done] + [
         PlannedStage(job.name, False, cost[job.name], job.deps) for job in plan.jobs
@@ -116,7 +116,7 @@ def _plan_stages(
     if config.delicate and backend == "mujoco":
         plan_robustness(plan, seeds, profile, backend, DELICATE)
     if config.study:
-        plan_study(plan, profile, backend, study_workers("local" if local else "ray"), inner_bars)
+        plan_study(plan, profile, backend, study_workers(local), inner_bars)
     plan_trajectories(plan, backend)
 
 
@@ -139,7 +139,7 @@ def _run_bench(config: BenchConfig, *, progress: bool, log: Callable[[str], None
         inner_bars = progress and local and config.workers == 1
         _plan_stages(plan, config, executor.candidate_pool(), local=local, inner_bars=inner_bars)
         names = [*plan.done, *(job.name for job in plan.jobs)]
-        workers = study_workers(executor.name)
+        workers = study_workers(local)
         costs = {name: expected_cost(name, profile, backend, workers) for name in names}
         walls = {
             name: cache.wall_s(plan.folder(name))

@@ -110,7 +110,11 @@ def gentlest(table: dict[str, Any]) -> dict[str, Any] | None:
         success = sum(cell["success_undamaged_mean"] for cell in cells) / len(cells)
         return damage, success
 
-    best = min(learned, key=lambda policy: (means(policy)[0], -means(policy)[1]))
+    def rank(policy: dict[str, Any]) -> tuple[float, float]:
+        damage, success = means(policy)
+        return damage, -success
+
+    best = min(learned, key=rank)
     damage, success = means(best)
     return {
         "policy": best["id"],

@@ -11,9 +11,9 @@ alternating in blocks so that the machine's load falls on all alike:
 
 * ``rigid -v2``: ``tolins/Circle2x{cols}-v2``'s physics (rigid pins, free flight on);
 * ``rigid -v1``: rigid pins on the contact step throughout (no free flight);
-* ``delicate``: ``tolins/Circle2x{cols}Delicate-v2``'s (elastic-plastic pins: free flight
-  off, chunks of physics steps in which no pin can reach yield, the return mapping after
-  each).
+* ``delicate``: ``tolins/Circle2x{cols}Delicate-v2``'s (elastic-plastic pins: on the
+  contact step chunks of physics steps in which no pin can reach yield, the return mapping
+  after each; in free flight the longer steps, the pins held as they are).
 
 Printed per row: ms of thread CPU time per control step (the best of ``--rounds`` rounds),
 the delicate env's over each rigid one's, the success rates, and the largest permanent tip

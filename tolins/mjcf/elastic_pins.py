@@ -70,20 +70,6 @@ def calibration(
     return armature, solref, (d, d, 0.001, 0.5, 2.0)
 
 
-def rescaled(
-    solref: np.ndarray, solimp: np.ndarray, factor: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The equalities' ``solref`` and ``solimp`` ``(n, 2)``/``(n, 5)`` of :func:`calibration`
-    at ``factor`` times the physics step they were made for, the armature kept: J_eff grows
-    by ``factor²``, so ``solref`` shrinks by ``factor²`` and ``factor`` and 1 − d by
-    ``factor²`` (at 5 ms from 1 ms: d 0.900 → 0.996, which settles, ``benchmarks/
-    pin_beam.py``; the 1 ms calibration diverges there)."""
-    ref = solref / np.array([factor**2, factor])
-    imp = solimp.copy()
-    imp[:, :2] = 1.0 - (1.0 - solimp[:, :2]) / factor**2
-    return ref, imp
-
-
 def elastic_pin_bodies(
     spec: CircularSocket, pins: ElasticPins, timestep: float, zone: str
 ) -> tuple[list[str], list[str]]:

@@ -368,6 +368,9 @@ def make_mjcf(
         pin_geoms, equalities = elastic_pin_bodies(spec, elastic, timestep, _zone_size(spec))
         pin_sites = []
     solref = contact_solref(timestep)
+    # A pin's hinges share constraint rows with nothing but the workpiece's four joints:
+    # sparse rows solve its contacts and equalities in half the time of dense ones.
+    jacobian = ' jacobian="sparse"' if elastic is not None else ""
     # With pairs, the pins take no part in automatic collision; a pair's contact
     # parameters are what the two geoms' defaults mix to (friction: the larger of each).
     pin_bits = 'contype="0" conaffinity="0"' if contact_pairs else 'contype="2" conaffinity="1"'
@@ -387,7 +390,7 @@ def make_mjcf(
         f'<mujoco model="tolins_{spec.family}">',
         '<compiler angle="radian" autolimits="true"/>',
         f'<option timestep="{num(timestep)}" integrator="implicitfast" solver="Newton" '
-        'tolerance="1e-10" cone="elliptic" gravity="0 0 0">',
+        f'tolerance="1e-10" cone="elliptic" gravity="0 0 0"{jacobian}>',
         '<flag multiccd="disable"/>',
         "</option>",
         f'<statistic center="0 0 2" extent="{num(extent)}"/>',

@@ -144,6 +144,19 @@ class PinPlasticity:
         qpos[self.hinges] = self.plastic
         qvel[self.dofs] = 0.0
 
+    def hold(self, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+        """Stop every pin (its hinges' speed in a simulation's ``qvel`` to zero) for steps in
+        which its model holds them (:func:`~tolins.physics.servo.pins_held`); returns their
+        hinges' angles, for :meth:`release`."""
+        qvel[self.dofs] = 0.0
+        return qpos[self.hinges].copy()
+
+    def release(self, qpos: np.ndarray, qvel: np.ndarray, angles: np.ndarray) -> None:
+        """After steps that held them, every pin exactly at ``angles`` (from :meth:`hold`),
+        at rest."""
+        qpos[self.hinges] = angles
+        qvel[self.dofs] = 0.0
+
     def steps(self, qpos: np.ndarray, qvel: np.ndarray, ctrl: np.ndarray, most: int) -> int:
         """:func:`safe_steps` of a simulation's ``qpos``, ``qvel`` and ``ctrl``."""
         return kernels()[1](

@@ -28,7 +28,6 @@ import numpy as np
 
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE, model_layout
-from tolins.mjcf.elastic_pins import rescaled
 from tolins.physics.free_flight import (
     FreeStep,
     ServoLimits,
@@ -61,21 +60,54 @@ def sensors_off(models: Iterable[mujoco.MjModel]) -> Iterator[None]:
 @contextlib.contextmanager
 def longer_steps(models: Iterable[mujoco.MjModel], factor: int) -> Iterator[None]:
     """The models' physics step ``factor`` times as long inside the block (free flight,
-    :mod:`tolins.physics.free_flight`), restored after it; a model's elastic-plastic pins'
-    equalities recalibrated for that step (:func:`~tolins.mjcf.elastic_pins.rescaled`)."""
+    :mod:`tolins.physics.free_flight`), restored after it."""
     steps = [(model, model.opt.timestep) for model in models] if factor > 1 else []
-    pins = [(m, m.eq_solref.copy(), m.eq_solimp.copy()) for m, _ in steps if m.neq]
     for model, value in steps:
         model.opt.timestep = value * factor
-    for model, solref, solimp in pins:
-        model.eq_solref[:], model.eq_solimp[:] = rescaled(solref, solimp, factor)
     try:
         yield
     finally:
         for model, value in steps:
             model.opt.timestep = value
-        for model, solref, solimp in pins:
-            model.eq_solref[:], model.eq_solimp[:] = solref, solimp
+
+
+#: ``opt.disableflags`` bits that a free-flight control step of elastic-plastic pins turns
+#: off: their equalities, and collision detection (nothing can touch, so none is found).
+_HELD_OFF = int(mujoco.mjtDisableBit.mjDSBL_EQUALITY) | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+#: A held pin's hinges' armature over their own: the workpiece's accelerations turn them by
+#: less than 1e-8 rad in a control step (and :func:`pins_held` undoes even that).
+HELD_ARMATURE = 1e6
+
+
+@contextlib.contextmanager
+def pins_held(
+    models: Iterable[mujoco.MjModel],
+    pins: list[tuple[PinPlasticity, np.ndarray, np.ndarray]],
+) -> Iterator[None]:
+    """Elastic-plastic pins held as if welded to their workpiece inside the block, for a
+    control step in free flight: ``pins`` ``(plasticity, qpos, qvel)`` of each simulation
+    (none: nothing is done), ``models`` theirs. Each pin stops; its model's equalities and
+    collision detection are off and its hinges' armature is :data:`HELD_ARMATURE` times
+    their own; after the block every pin is put back exactly where it was, at rest, and the
+    models restored. In free flight nothing loads a pin: held, it costs about a rigid pin's
+    step, where its equalities' rows would be solved in every step (and would need a
+    calibration of their own at the longer step, whose 1 ms one diverges there)."""
+    if not pins:
+        yield
+        return
+    angles = [plasticity.hold(qpos, qvel) for plasticity, qpos, qvel in pins]
+    held = [(model, model.opt.disableflags, model.dof_armature.copy()) for model in models]
+    for model, flags, armature in held:
+        model.opt.disableflags = flags | _HELD_OFF
+        model.dof_armature[model.nu :] = armature[model.nu :] * HELD_ARMATURE
+    try:
+        yield
+    finally:
+        for model, flags, armature in held:
+            model.opt.disableflags = flags
+            model.dof_armature[:] = armature
+        for (plasticity, qpos, qvel), at in zip(pins, angles, strict=True):
+            plasticity.release(qpos, qvel, at)
 
 
 def run_segments(
@@ -239,10 +271,10 @@ class ServoStepper:
 
     A model with elastic-plastic pins (:mod:`tolins.mjcf.elastic_pins`) is stepped in chunks
     in which no pin can reach yield, the return mapping after each
-    (:class:`~tolins.physics.plasticity.PinPlasticity`, :attr:`plasticity`). In free flight
-    its pins' equalities are recalibrated for the longer step (:func:`longer_steps`; the
-    contact step's calibration diverges at 5 ms), and the pins' reach grows by their tip
-    offsets now (:func:`bent_limits`).
+    (:class:`~tolins.physics.plasticity.PinPlasticity`, :attr:`plasticity`). A control step
+    in free flight holds its pins as they are (:func:`pins_held`: nothing loads them
+    there), its window included, and the pins' reach grows by their tip offsets now
+    (:func:`bent_limits`).
 
     Args:
         model: A model made by :func:`tolins.make_mjcf`.
@@ -398,16 +430,20 @@ class ServoStepper:
         """``n`` contact steps' time in the chosen physics steps. With :attr:`lazy_sensors`
         the model's sensors are switched off for all but the last step, so the model must
         not be stepped elsewhere meanwhile."""
-        m, d = self.model, self.data
+        m, d, plasticity = self.model, self.data, self.plasticity
         segments, self._window_left = chunk_segments(n, self._window_left, self.step_factor)
-        if self.plasticity is not None:
-            queue = [[factor, steps] for factor, steps in segments if steps]
-            while queue:
-                factor, k, last = next_chunk(self.plasticity, d.qpos, d.qvel, d.ctrl, queue)
-                run_chunk(lambda j: mujoco.mj_step(m, d, nstep=j), [m], factor, k, last)
-                self.plasticity.update(d.qpos)
+        step = functools.partial(mujoco.mj_step, m, d)
+        if plasticity is not None and self.step_factor == 1:
+            left = n
+            while left:
+                k = plasticity.steps(d.qpos, d.qvel, d.ctrl, left)
+                left -= k
+                run_chunk(step, [m], k, not left)
+                plasticity.update(d.qpos)
             return
-        run_segments(lambda k: mujoco.mj_step(m, d, nstep=k), [m], segments, self.lazy_sensors)
+        pins = [] if plasticity is None else [(plasticity, d.qpos, d.qvel)]
+        with pins_held([m], pins):
+            run_segments(step, [m], segments, self.lazy_sensors)
 
     def higher_force(self, peak: float) -> float:
         return max(peak, sum(self._touch.tolist()))
@@ -422,41 +458,18 @@ class ServoStepper:
         return self.advance(nstep)
 
 
-def next_chunk(
-    plasticity: PinPlasticity,
-    qpos: np.ndarray,
-    qvel: np.ndarray,
-    ctrl: np.ndarray,
-    queue: list[list[int]],
-) -> tuple[int, int, bool]:
-    """The next chunk ``(factor, steps, last)`` of a simulation with elastic-plastic pins,
-    taken off ``queue`` (its segments ``[factor, steps]`` left in a chunk of contact steps):
-    on the contact step as many steps as no pin can reach yield in
-    (:meth:`PinPlasticity.steps`), in free flight the whole segment (nothing touches);
-    ``last``: it ends the chunk of contact steps."""
-    factor, left = queue[0]
-    k = left if factor > 1 else plasticity.steps(qpos, qvel, ctrl, left)
-    queue[0][1] -= k
-    if not queue[0][1]:
-        queue.pop(0)
-    return factor, k, not queue
-
-
 def run_chunk(
-    step: Callable[[int], None],
-    models: list[mujoco.MjModel],
-    factor: int,
-    k: int,
-    last: bool,
+    step: Callable[[int], None], models: list[mujoco.MjModel], k: int, last: bool
 ) -> None:
-    """``step(k)`` on ``models`` with physics steps ``factor`` contact steps long, the sensors
-    computed only in its last step when it ends the chunk of contact steps (``last``), else
-    not at all (with :attr:`ServoStepper.lazy_sensors`)."""
+    """``step(k)`` on ``models`` on the contact step (a chunk in which no elastic-plastic pin
+    can reach yield: :meth:`PinPlasticity.steps`), the sensors computed only in its last
+    step when it ends the chunk of contact steps (``last``), else not at all (with
+    :attr:`ServoStepper.lazy_sensors`)."""
     lazy = ServoStepper.lazy_sensors
     if last or not lazy:
-        run_segments(step, models, [(factor, k)], lazy)
+        run_segments(step, models, [(1, k)], lazy)
         return
-    with longer_steps(models, factor), sensors_off(models):
+    with sensors_off(models):
         step(k)
 
 
@@ -654,47 +667,51 @@ class BatchServo:
     def physics_steps(self, n: int) -> None:
         """As :meth:`ServoStepper.physics_steps`, on every simulation of ``self.ids``: one
         ``Batch.step`` per physics step length chosen."""
+        flying = self.step_factors > 1
         if self.elastic:
-            self._plastic_steps(n)
-            return
-        plans = np.stack([self._windows_left, self.step_factors], axis=1)
+            self._plastic_steps(n, self.ids[~flying])
+        rows = np.flatnonzero(flying) if self.elastic else np.arange(len(self.ids))
+        plans = np.stack([self._windows_left[rows], self.step_factors[rows]], axis=1)
         for window, factor in np.unique(plans, axis=0).tolist():
-            chosen = (self._windows_left == window) & (self.step_factors == factor)
+            chosen = rows[(plans[:, 0] == window) & (plans[:, 1] == factor)]
             ids = self.ids[chosen]
             models = list({id(self.models[i]): self.models[i] for i in ids.tolist()}.values())
-            segments, left = chunk_segments(n, window, factor)
-            self._windows_left[chosen] = left
-            run_segments(
-                lambda k, ids=ids: self.batch.step(ids, nstep=k),
-                models,
-                segments,
-                ServoStepper.lazy_sensors,
+            segments, self._windows_left[chosen] = chunk_segments(n, window, factor)
+            pins = (
+                [(self.plasticity[i], self.qpos[i], self.qvel[i]) for i in ids.tolist()]
+                if self.elastic
+                else []
             )
+            with pins_held(models, pins):
+                run_segments(
+                    lambda k, ids=ids: self.batch.step(ids, nstep=k),
+                    models,
+                    segments,
+                    ServoStepper.lazy_sensors,
+                )
 
-    def _plastic_steps(self, n: int) -> None:
-        """As :meth:`ServoStepper.physics_steps` with elastic-plastic pins, simulation by
-        simulation: each takes the chunks its own state allows (:func:`next_chunk`), one
-        ``Batch.step`` per chunk length, step length and end, then its return mapping."""
-        queues = {}
-        for k, i in enumerate(self.ids.tolist()):
-            window, factor = int(self._windows_left[k]), int(self.step_factors[k])
-            segments, self._windows_left[k] = chunk_segments(n, window, factor)
-            queues[i] = [[f, steps] for f, steps in segments if steps]
-        while queues:
+    def _plastic_steps(self, n: int, ids: np.ndarray) -> None:
+        """As :meth:`ServoStepper.physics_steps` on the contact step with elastic-plastic
+        pins, for simulations ``ids``: each takes the chunks its own state allows
+        (:meth:`PinPlasticity.steps`), one ``Batch.step`` per chunk length and end, then its
+        return mapping."""
+        left = dict.fromkeys(ids.tolist(), n)
+        while left:
             chunks = {
-                i: next_chunk(self.plasticity[i], self.qpos[i], self.qvel[i], self.ctrl[i], queue)
-                for i, queue in queues.items()
+                i: self.plasticity[i].steps(self.qpos[i], self.qvel[i], self.ctrl[i], rest)
+                for i, rest in left.items()
             }
-            groups: dict[tuple[int, int, bool], list[int]] = {}
-            for i, chunk in chunks.items():
-                groups.setdefault(chunk, []).append(i)
-            for (factor, k, last), members in groups.items():
-                ids = np.array(members, dtype=np.intp)
+            groups: dict[tuple[int, bool], list[int]] = {}
+            for i, k in chunks.items():
+                left[i] -= k
+                groups.setdefault((k, not left[i]), []).append(i)
+            for (k, last), members in groups.items():
+                chosen = np.array(members, dtype=np.intp)
                 models = [self.models[i] for i in members]
-                run_chunk(lambda j, ids=ids: self.batch.step(ids, nstep=j), models, factor, k, last)
+                run_chunk(lambda j, c=chosen: self.batch.step(c, nstep=j), models, k, last)
             for i in chunks:
                 self.plasticity[i].update(self.qpos[i])
-            queues = {i: queue for i, queue in queues.items() if queue}
+            left = {i: rest for i, rest in left.items() if rest}
 
     def higher_force(self, peak: np.ndarray) -> np.ndarray:
         touch = sequential_sum(self.sensordata[self.ids, self.layout.touch])

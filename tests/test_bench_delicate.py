@@ -8,7 +8,7 @@ import pytest
 
 from tolins.bench.jobs.robustness import EPISODES
 from tolins.bench.pipeline.config import BenchConfig
-from tolins.bench.pipeline.runner import run_bench
+from tolins.bench.pipeline.runner import plan_bench, run_bench
 from tolins.bench.table.claims import HELD, INCONCLUSIVE, NO_DIFFERENCE, NOT_HELD
 from tolins.bench.table.delicate import DELICATE, damage_claim, gentlest
 from tolins.rollouts.episodes import Episode, episode_from_dict, episode_to_dict
@@ -118,3 +118,19 @@ def test_an_episode_keeps_damage_only_where_pins_bend() -> None:
     bent = Episode(1.0, True, 3, 0, damaged=True)
     assert episode_to_dict(bent)["damaged"] is True
     assert episode_from_dict(episode_to_dict(bent)) == bent
+
+
+def test_the_table_evaluates_row_c1s_imitators_beside_row_c2s(tmp_path) -> None:
+    config = _config(tmp_path, rows="C1.2,C1.3,C2.2")
+    planned = {stage.name: stage for stage in plan_bench(config)}
+    delicate = [name for name in planned if name.startswith(DELICATE.prefix)]
+    assert delicate == [
+        "delicate-safe-seed0",
+        "delicate-efficient-seed0",
+        "delicate-bc_efficient-seed0",  # C1: the efficient expert's imitators
+        "delicate-pi_n_efficient-seed0",
+        "delicate-pi_bc-seed0",  # C2: the safe one's (its π_n is not trained by these rows)
+    ]
+    assert "bc_efficient-seed0" in planned["delicate-bc_efficient-seed0"].needs
+    labels = {policy.id: policy.label for policy in DELICATE.policies}
+    assert labels["bc_efficient"] == "π_bc (C1)" and labels["pi_bc"] == "π_bc (C2)"

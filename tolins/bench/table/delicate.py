@@ -2,8 +2,9 @@
 the evaluation workpieces of Table 1's circle rows with pins that bend and stay bent
 (docs/delicate.md).
 
-The lines are the Panda table's (:data:`~tolins.bench.table.robot.ROBOT_POLICIES`: the
-experts, π_bc, π_n, π_φ and π_φ*, trained on rigid pins); the columns
+The lines (:data:`DELICATE_POLICIES`) are every Table 1 policy of the circle rows, trained
+on rigid pins: the experts, row C1's π_bc and π_n (which imitate the efficient expert),
+row C2's (the safe one), π_φ and π_φ*; the columns
 (:data:`CONDITIONS`) the paper's 2*2 at 200 µm, its 50 µm grade and the 2*4 with
 ``pins="elastic-plastic"`` (phosphor bronze, a pin damaged beyond half the radial
 clearance), and the C4 rows' bent-pin 2*1 with those pins, where π_φ* re-plans after each
@@ -20,12 +21,13 @@ pins cannot bend.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
 from tolins.bench.table.claims import HELD, INCONCLUSIVE, NO_DIFFERENCE, NOT_HELD
 from tolins.bench.table.robot import ROBOT_POLICIES
-from tolins.bench.table.robustness import Condition, ConditionTable
+from tolins.bench.table.robustness import Condition, ConditionTable, RobustPolicy
 from tolins.bench.table.rows import bench_id
 from tolins.bench.table.statistics import EPISODES, SEEDS, difference, equivalent, sign
 from tolins.geometry.specs import GRADES_UM
@@ -55,8 +57,17 @@ CONDITIONS: tuple[Condition, ...] = (
         "delicate_c4", "bent-pin 2*1 (C4)", "delicate", bench_id("Circle2x1Defective"), GRADES_UM[0]
     ),
 )
+#: The lines: the Panda table's (:data:`~tolins.bench.table.robot.ROBOT_POLICIES`), with
+#: row C1's π_bc and π_n beside row C2's, each pair labelled with its row.
+DELICATE_POLICIES: tuple[RobustPolicy, ...] = (
+    *ROBOT_POLICIES[:2],
+    RobustPolicy("bc_efficient", "π_bc (C1)", "bc_efficient"),
+    RobustPolicy("pi_n_efficient", "π_n (C1)", "pi_n_efficient"),
+    *(dataclasses.replace(policy, label=f"{policy.label} (C2)") for policy in ROBOT_POLICIES[2:4]),
+    *ROBOT_POLICIES[4:],
+)
 #: The table.
-DELICATE = ConditionTable(KEY, "delicate-", ROBOT_POLICIES, CONDITIONS)
+DELICATE = ConditionTable(KEY, "delicate-", DELICATE_POLICIES, CONDITIONS)
 #: The claim the table checks, in the words of results.md.
 CLAIM = "the safe expert damages fewer parts than the efficient one"
 #: The smallest difference of damage rate that matters (a share of episodes), written

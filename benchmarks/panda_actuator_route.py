@@ -261,7 +261,8 @@ def install_actuators(env, limits: Limits, inertia: str = "decoupled") -> None:
             at = bool(np.any(saturated >= ids["force_limit"][limited] * (1 - 1e-9)))
             limits.torques(data.qfrc_actuator[arm.dof], arm.limit, at)
 
-        run_plan(model, data, sims.plan, functools.partial(update, i, sims._span), read)
+        law = functools.partial(sims._update_law, i, sims._span)
+        run_plan(model, data, sims.plan, law, read)
         sims.target[i] = data.act[act[:3]]
         sims.yaw[i] = data.act[act[5]]
         limits.joints(arm, data)
@@ -455,13 +456,83 @@ def cost_table(presets: list[str], episodes: int) -> None:
             )
 
 
+#: The probe's action: the safe expert's first on the 2*2 (seed 0), moving along x and y
+#: and turning at once.
+PROBE = np.array([1.34, -2.5, 0.1, 0.0])
+
+
+def creep(route: str, no_yaw_feedforward: bool = False) -> np.ndarray:
+    """How far (µm, the grip site's frame: along the pads, across, down the fingers) the
+    part moves in the hand over one control step of :data:`PROBE` after seed 0's reset on
+    the 2*2, and the largest rate (rad/s) at which the hand turns about its x (along the pads)
+    and y (across them) axes over the step's second half: ``no_yaw_feedforward`` drops the
+    prototype's yaw damper's command."""
+    env = make("Circle2x2", route)
+    sims = env.backend._batch.sims
+    model, data = sims.models[0], sims.datas[0]
+    part = model.joint("workpiece").qposadr[0]
+    if no_yaw_feedforward:
+        law, yaw = sims._update_law, model.actuator("damper5").id
+
+        def update(i: int, *args, **kwargs) -> None:
+            law(i, *args, **kwargs)
+            data.ctrl[yaw] = 0.0
+
+        sims._update_law = update
+
+    def in_hand() -> np.ndarray:
+        frame = data.site_xmat[sims.arm.site].reshape(3, 3)
+        return frame.T @ (data.qpos[part : part + 3] - data.site_xpos[sims.arm.site])
+
+    rates = []
+    step = mujoco.mj_step
+
+    def recorded(m, d, nstep=1):
+        for _ in range(nstep):
+            step(m, d)
+            velocity = np.zeros(6)  # rotation, then translation, in the site's frame
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, sims.arm.site, velocity, 1)
+            rates.append(np.abs(velocity[:2]))
+
+    env.reset(seed=0)
+    before = in_hand()
+    sims.plan = tuple((count, update, True) for count, update, _ in sims.plan)
+    mujoco.mj_step = recorded
+    try:
+        env.step(PROBE)
+    finally:
+        mujoco.mj_step = step
+    turning = np.max(rates[len(rates) // 2 :], axis=0)
+    return np.r_[(in_hand() - before) * 1e3, turning]
+
+
+def creep_table() -> None:
+    print(
+        f"\n**The part in the hand over one control step of {PROBE.tolist()}** (2*2, seed "
+        "0's reset; µm in the grip frame; the hand's largest turning rate about the grip frame's x "
+        "and y axes over the step's second half)\n\n"
+        "| route | along the pads | across | down the fingers | about x (rad/s) | about y |\n"
+        "|---|--:|--:|--:|--:|--:|"
+    )
+    for label, route, drop in (
+        ("`-v3` compiled law", "law", False),
+        ("actuators", "actuators", False),
+        ("actuators, no yaw feed-forward", "actuators", True),
+    ):
+        x, y, z, about_x, about_y = creep(route, drop)
+        print(
+            f"| {label} | {x:+.1f} | {y:+.1f} | {z:+.1f} | {about_x:.4f} | {about_y:.4f} |",
+            flush=True,
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=100, help="per success cell")
     parser.add_argument("--presets", default="Circle2x2,Circle2x8,Square")
     parser.add_argument("--cost-episodes", type=int, default=10)
     parser.add_argument("--cost-presets", default="Circle2x2,Circle2x2Fit50")
-    parser.add_argument("--skip", default="", help="comma list of: success, cost")
+    parser.add_argument("--skip", default="", help="comma list of: cost, creep, success")
     parser.add_argument("--inertia", choices=INERTIAS, default="decoupled")
     args = parser.parse_args()
     INERTIA[0] = args.inertia
@@ -472,6 +543,8 @@ def main() -> None:
     )
     if "cost" not in skip:
         cost_table(args.cost_presets.split(","), args.cost_episodes)
+    if "creep" not in skip:
+        creep_table()
     if "success" not in skip:
         limits_table(success_table(args.presets.split(","), args.episodes))
 

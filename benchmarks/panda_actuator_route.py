@@ -244,6 +244,8 @@ def install_actuators(env, limits: Limits, inertia: str = "decoupled") -> None:
             )
             if edge:
                 twist[axis] = 0.0
+        if not YAW_FEEDFORWARD[0]:
+            twist[5] = 0.0
         data.ctrl[damper] = twist
         data.ctrl[ids["payload"]] = held * 9810.0
         data.ctrl[ids["posture"]] = sims.posture[i]
@@ -287,6 +289,9 @@ def watch_law(env, limits: Limits) -> None:
 
 #: The gain scaling :func:`make` gives the prototype (``--inertia``).
 INERTIA = ["decoupled"]
+#: Whether the prototype's yaw damper is commanded the twist's turn (``--no-yaw-feedforward``
+#: drops it: the law's feed-forward on x, y and z alone).
+YAW_FEEDFORWARD = [True]
 
 
 def make(preset: str, route: str, limits: Limits | None = None, numpy_law: bool = False):
@@ -534,12 +539,15 @@ def main() -> None:
     parser.add_argument("--cost-presets", default="Circle2x2,Circle2x2Fit50")
     parser.add_argument("--skip", default="", help="comma list of: cost, creep, success")
     parser.add_argument("--inertia", choices=INERTIAS, default="decoupled")
+    parser.add_argument("--no-yaw-feedforward", action="store_true")
     args = parser.parse_args()
     INERTIA[0] = args.inertia
+    YAW_FEEDFORWARD[0] = not args.no_yaw_feedforward
     skip = set(filter(None, args.skip.split(",")))
     print(
         f"`-v3` law at {LAW_RATE} Hz; prototype gains scaled by the {args.inertia} task "
-        f"inertia; mujoco {mujoco.__version__}"
+        f"inertia; yaw feed-forward {'on' if YAW_FEEDFORWARD[0] else 'off'}; "
+        f"mujoco {mujoco.__version__}"
     )
     if "cost" not in skip:
         cost_table(args.cost_presets.split(","), args.cost_episodes)

@@ -172,6 +172,26 @@ def test_a_bend_stays_and_keep_part_carries_it_to_the_next_episode() -> None:
     assert not fresh["pin_bend"].any() and fresh["damaged"] is False
 
 
+def test_free_flight_holds_bent_pins_and_moves_the_part_as_rigid_pins() -> None:
+    env = InsertionEnv(CircularSocket(2, 1), pin_material="alloy42", physics_version=2, **ELASTIC)
+    bend = _bend_in_a_hole(env)["pin_bend"]
+    rigid = InsertionEnv(CircularSocket(2, 1), physics_version=2)
+    pose = [0.5, -0.5, 0.1, 5.0]  # 5 mm over the board: nothing can touch
+    env.reset(seed=1, options={"pose": pose, "keep_part": True})
+    rigid.reset(seed=1, options={"pose": pose})
+    stepper, model = env.backend.stepper, env.backend.model
+    armature, flags = model.dof_armature.copy(), model.opt.disableflags
+    for action in ([1.0, -1.0, 0.05, 2.0], [-2.0, 1.0, -0.1, -1.0], [0.0, 0.0, 0.0, 0.0]):
+        *_, info = env.step(action)
+        rigid.step(action)
+        assert stepper.step_factor > 1  # free flight's longer steps
+        assert np.array_equal(info["pin_deflection"], bend)  # held exactly, at rest
+        assert not stepper.data.qvel[model.nu :].any()
+        part, rigid_part = stepper.data.qpos[: model.nu], rigid.backend.data.qpos[: model.nu]
+        assert np.allclose(part, rigid_part, rtol=0.0, atol=1e-9)  # measured 2e-13
+    assert np.array_equal(model.dof_armature, armature) and model.opt.disableflags == flags
+
+
 def test_the_delicate_reward_ends_the_episode_with_its_penalty_on_damage() -> None:
     """With ``damage_penalty`` the step that damages a pin gets the penalty and terminates
     the episode; without it the same step goes on, unrewarded (the same physics)."""

@@ -520,7 +520,7 @@ class BatchServo:
     With elastic-plastic pins each simulation runs on its own model, whose ``eq_data`` holds
     its plastic set (:class:`~tolins.physics.plasticity.PinPlasticity`), in the chunks and
     with the return mapping of :class:`ServoStepper`, simulation by simulation, so each is
-    the single env's bit for bit; free flight is off for them, as there.
+    the single env's bit for bit, and in free flight with their pins held, as there.
     """
 
     def __init__(

@@ -4,7 +4,11 @@ Usage::
 
     python benchmarks/panda_actuator_route.py [--episodes 100]
         [--presets Circle2x2,Circle2x8,Square] [--cost-episodes 10]
-        [--cost-presets Circle2x2,Circle2x2Fit50]
+        [--cost-presets Circle2x2,Circle2x2Fit50] [--skip cost,creep,success]
+        [--inertia decoupled|diagonal] [--no-yaw-feedforward]
+
+Results and what they mean for the route: ``benchmarks/README.md``, "The law as MuJoCo
+actuators".
 
 Issue 47's second route, built here and not as an env version: the ``-v3`` Panda world
 tolins generates for a workpiece (:func:`tolins.mjcf.panda.panda_world`), its Python/numba
@@ -16,9 +20,10 @@ law replaced by actuators that MuJoCo computes inside ``mj_step``:
   ``actrange`` the workspace, :func:`tolins.physics.panda.target_range`) whose force
   ``Kp (target − length)`` is limited by ``forcerange`` to the law's spring limit (20 N
   sideways, 5 N up and down), and a velocity actuator ``Kd (v* − v)`` (the law's damping
-  and feed-forward); ``Kp`` and ``Kd`` are the ``-v3`` law's gains (s⁻²) times the
-  diagonal of its task inertia ``Λ`` at the first reset's grasp (no Λ weighting, no
-  cross terms: the one thing the law has that a site actuator cannot);
+  and feed-forward); ``Kp`` and ``Kd`` are the ``-v3`` law's gains (s⁻²) times an
+  inertia per axis from its task inertia ``Λ`` at the first reset's grasp
+  (``--inertia``, :data:`INERTIAS`; no cross terms: the one thing the law has that a site
+  actuator cannot);
 - ``gravcomp`` on the arm's bodies with ``actuatorgravcomp`` on its joints, and the
   joints' ``actuatorfrcrange`` at the Franka's torque limits (87 / 12 N·m), so that all
   actuator torques on a joint together stay within its motor's limit, as the law clips;
@@ -41,7 +46,9 @@ free body, ``-v3`` with the law in numpy, ``-v3`` compiled, its physics alone (t
 prototype (its step and its time in ``mj_step``), with the ratios; (c) the limits: the
 closest any arm joint came to its range, the largest total actuator torque on a joint
 over its motor's limit (sampled at every contact read, 5 per control step) and the share
-of samples at it, and the share with a Cartesian spring at its force limit.
+of samples at it, and the share with a Cartesian spring at its force limit; and a probe:
+how far the part moves in the hand over one control step that moves and turns
+(:func:`creep_table`).
 """
 
 from __future__ import annotations
@@ -56,7 +63,7 @@ import mujoco
 import numpy as np
 
 import tolins  # noqa: F401  (registers the ids)
-from tolins.mjcf.panda import ARM_JOINTS, GRIP_SITE, PREFIX, panda_world
+from tolins.mjcf.panda import ARM_JOINTS, GRAVITY, GRIP_SITE, PREFIX, panda_world
 from tolins.physics.arm import Arm
 from tolins.physics.panda import (
     LAW_RATE,
@@ -247,7 +254,7 @@ def install_actuators(env, limits: Limits, inertia: str = "decoupled") -> None:
         if not YAW_FEEDFORWARD[0]:
             twist[5] = 0.0
         data.ctrl[damper] = twist
-        data.ctrl[ids["payload"]] = held * 9810.0
+        data.ctrl[ids["payload"]] = -held * GRAVITY[2]
         data.ctrl[ids["posture"]] = sims.posture[i]
 
     def step_one(i: int) -> float:

@@ -61,6 +61,7 @@ import time
 import gymnasium as gym
 import mujoco
 import numpy as np
+from panda_step_cost import Timed  # a callable timed while installed
 
 import tolins  # noqa: F401  (registers the ids)
 from tolins.mjcf.panda import ARM_JOINTS, GRAVITY, GRIP_SITE, PREFIX, panda_world
@@ -317,21 +318,12 @@ def make(preset: str, route: str, limits: Limits | None = None, numpy_law: bool 
     return env
 
 
-class PhysicsClock:
-    """``mujoco.mj_step`` timed (thread CPU time) while installed."""
-
-    def __init__(self) -> None:
-        self.step, self.seconds = mujoco.mj_step, 0.0
-
-    def __call__(self, *args, **kwargs):
-        began = time.thread_time()
-        try:
-            return self.step(*args, **kwargs)
-        finally:
-            self.seconds += time.thread_time() - began
+def physics_clock() -> Timed:
+    """``mujoco.mj_step`` timed on thread CPU time (installed by :func:`run`)."""
+    return Timed(mujoco.mj_step, time.thread_time)
 
 
-def run(env, expert: str, episodes: int, clock: PhysicsClock | None = None) -> dict[str, float]:
+def run(env, expert: str, episodes: int, clock: Timed | None = None) -> dict[str, float]:
     """Outcomes and the thread CPU time per control step (ms) of ``episodes`` episodes."""
     successes, steps, faults, cpu, count = [], [], 0, 0.0, 0
     for seed in range(episodes):
@@ -347,7 +339,7 @@ def run(env, expert: str, episodes: int, clock: PhysicsClock | None = None) -> d
                 observation, _, terminated, truncated, info = env.step(action)
             finally:
                 cpu += time.thread_time() - began
-                mujoco.mj_step = clock.step if clock is not None else mujoco.mj_step
+                mujoco.mj_step = clock.function if clock is not None else mujoco.mj_step
             count += 1
             done = terminated or truncated or "error" in info
         successes.append(float(info["success"]))
@@ -454,9 +446,13 @@ def cost_table(presets: list[str], episodes: int) -> None:
             free = run(make(preset, "free"), expert, episodes)
             numpy_law = run(make(preset, "law", numpy_law=True), expert, episodes)
             law = run(make(preset, "law"), expert, episodes)
-            law_physics = run(make(preset, "law"), expert, episodes, PhysicsClock())
+            law_physics = run(
+                make(preset, "law"), expert, episodes, Timed(mujoco.mj_step, time.thread_time)
+            )
             act = run(make(preset, "actuators"), expert, episodes)
-            act_physics = run(make(preset, "actuators"), expert, episodes, PhysicsClock())
+            act_physics = run(
+                make(preset, "actuators"), expert, episodes, Timed(mujoco.mj_step, time.thread_time)
+            )
             physics = law_physics["physics_ms"]
             print(
                 f"| {preset} | {expert} | {free['ms']:.2f} | {numpy_law['ms']:.2f} "

@@ -10,9 +10,7 @@ import pytest
 
 pytest.importorskip("minari")
 
-from tolins.bench.pipeline.config import BenchConfig
 from tolins.bench.pipeline.profiles import PROFILES
-from tolins.bench.pipeline.runner import run_bench
 from tolins.bench.table.rows import CIRCLE_2X2, CIRCLE_2X8
 from tolins.learning.imitation import runs
 from tolins.learning.imitation.policy import load_policy
@@ -24,16 +22,15 @@ def _stage(out, prefix):
 
 
 @pytest.mark.slow
-def test_bench_trainings_read_minari_datasets_and_equal_inline_demonstrations(tmp_path):
+def test_bench_trainings_read_minari_datasets_and_equal_inline_demonstrations(tiny_bench, tmp_path):
+    """The bench's stages: the shared tiny bench's (tests/conftest.py)."""
     import minari
 
     out = tmp_path / "bench"
-    config = BenchConfig(
-        profile="tiny", backend="kinematic", rows="C2.2,C2.3,C3.2", out=str(out), study=False
-    )
-    run = run_bench(config, progress=False, log=lambda _: None)
     demos = {"demos-Circle2x2-safe-seed0-0", "demos-Circle2x8-safe-seed0-1"}
-    assert demos <= set(run.stage_wall_s)
+    assert demos <= set(tiny_bench.run.stage_wall_s)
+    trainings = {"bc_safe-seed0", "pi_n_safe-seed0", "pi_phi_circle-seed0"}
+    tiny_bench.copy_stages(out, keep=lambda name: name in demos | trainings)
 
     profile = PROFILES["tiny"]
     for name, env_id in zip(sorted(demos), (CIRCLE_2X2, CIRCLE_2X8), strict=True):

@@ -56,12 +56,15 @@ def test_the_stage_key_sees_the_trained_policy_and_the_episodes():
     assert 1 <= TINY.robustness_episodes <= 2 < PROFILES["quick"].robustness_episodes
 
 
-def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tmp_path):
+def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tiny_bench, tmp_path):
+    """The robustness stages run here; the trainings and row evaluations they read are the
+    shared tiny bench's (tests/conftest.py, the same stages as a run of these rows makes)."""
+    names = [robustness.stage_name(p, 0) for p in POLICIES]
+    tiny_bench.copy_stages(tmp_path, keep=lambda name: name not in names)
     config = BenchConfig(
         profile="tiny", backend="kinematic", rows="C2.1,C2.3,C4.2", out=str(tmp_path), study=False
     )
     run = run_bench(config, progress=False, log=lambda _: None)
-    names = [robustness.stage_name(p, 0) for p in POLICIES]
     assert all(name in run.stage_folders for name in names)
     assert not any(name in run.cached for name in names)
     table = run.robustness
@@ -89,6 +92,7 @@ def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tmp_path)
 
     # Without the table: no key, no plot, and tolins compare reads both documents.
     without = replace(config, robustness=False, out=str(tmp_path / "b"))
+    tiny_bench.copy_stages(tmp_path / "b", keep=lambda name: name not in names)
     run_bench(without, progress=False, log=lambda _: None)
     assert KEY not in json.loads((tmp_path / "b" / "results.json").read_text())
     assert not (tmp_path / "b" / "robustness.png").exists()

@@ -21,13 +21,18 @@ import pytest
 
 import tolins
 from tolins import CircularSocket
-
-pytest.importorskip("mujoco_warp", reason="backend='warp' needs pip install 'tolins[warp]'")
-
 from tolins.physics.mujoco import MujocoBatch
 from tolins.physics.warp import WarpBatch
 
-pytestmark = pytest.mark.slow
+# Found, not imported: importing mujoco_warp takes 3 CPU-s, which each pytest-xdist worker
+# would pay while collecting, though one runs this file (the tests import it).
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        importlib.util.find_spec("mujoco_warp") is None,
+        reason="backend='warp' needs pip install 'tolins[warp]'",
+    ),
+]
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 SOCKET = CircularSocket(2, 2)
 #: Largest difference of a wrench component or peak force between the backends (N, N·mm)

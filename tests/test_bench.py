@@ -280,7 +280,9 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tiny_bench, tmp_path
     assert kinematic.cached == []
     assert "Backends side by side" not in (tmp_path / "results.md").read_text()
 
-    again = run_bench(BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path)))
+    again = run_bench(
+        BenchConfig(profile="tiny", backend="kinematic", out=str(tmp_path), figures=False)
+    )
     # 5 demonstration datasets, 8 + 8 (SB3) trainings, 15 + 8 evaluations, the study, 5
     # robustness stages, π_n's trajectories: none ran again
     assert len(again.cached) == 51
@@ -298,6 +300,7 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tiny_bench, tmp_path
         robustness=False,
         robot=False,
         delicate=False,
+        figures=False,  # drawn and checked in the kinematic run above
     )
     run_bench(mujoco)
     results = json.loads((tmp_path / "results.json").read_text())["rows"]
@@ -308,11 +311,17 @@ def test_tiny_bench_on_both_backends_resumes_from_its_cache(tiny_bench, tmp_path
     assert not (tmp_path / "inference.json").exists()  # not the kinematic run's study
 
 
-def _no_sections(out, rows: str | None = None) -> BenchConfig:
+def _no_sections(out, rows: str | None = None, figures: bool = False) -> BenchConfig:
     """The tiny kinematic bench (of ``rows``, default all) without the study and the
-    robustness table."""
+    robustness table (and, unless asked for, without figures)."""
     return BenchConfig(
-        profile="tiny", backend="kinematic", rows=rows, out=str(out), study=False, robustness=False
+        profile="tiny",
+        backend="kinematic",
+        rows=rows,
+        out=str(out),
+        study=False,
+        robustness=False,
+        figures=figures,
     )
 
 
@@ -373,7 +382,12 @@ def test_a_moved_bench_folder_resumes_and_is_re_reported_from_its_cache(
     def config(folder: str) -> BenchConfig:
         out = str(tmp_path / folder)
         return BenchConfig(
-            profile="tiny", backend="kinematic", rows=",".join(rows), out=out, robustness=False
+            profile="tiny",
+            backend="kinematic",
+            rows=",".join(rows),
+            out=out,
+            robustness=False,
+            figures=False,
         )
 
     def quiet(config: BenchConfig):
@@ -461,7 +475,25 @@ def test_the_bench_parts_import_downwards_only():
 
 def test_a_bench_of_deep_rl_rows_only_reports_their_workpieces(tiny_bench, tmp_path):
     tiny_bench.copy_stages(tmp_path)  # the training and evaluation of the row: its reports
-    bench = run_bench(_no_sections(tmp_path, rows="R1.1"), progress=False, log=lambda _: None)
+    config = _no_sections(tmp_path, rows="R1.1", figures=True)
+    bench = run_bench(config, progress=False, log=lambda _: None)
     assert list(bench.results) == ["R1.1"]
     assert (tmp_path / "tolerance_images.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "| R1.1 |" in (tmp_path / "results.md").read_text()
+
+
+def test_a_run_without_figures_writes_the_same_results_and_no_png(tiny_bench, tmp_path):
+    """``--no-figures``: the shared tiny bench's folder (its figures drawn) re-reported
+    without them: the same results, every earlier figure gone, results.md links none."""
+    out = tmp_path / "bench"
+    shutil.copytree(tiny_bench.folder, out)
+    assert (out / "table.png").is_file() and list((out / "claims").glob("*.png"))
+    before = read_results(out)
+    options = ["bench", "--profile", "tiny", "--backend", "kinematic", "--no-robot"]
+    assert main([*options, "--no-figures", "--out", str(out)]) == 0
+    assert read_results(out)["rows"] == before["rows"]
+    assert not [p for p in out.rglob("*.png") if "stages" not in p.relative_to(out).parts]
+    markdown = (out / "results.md").read_text()
+    assert "![" not in markdown and "--no-figures" in markdown
+    for row_id in ALL_ROW_IDS:
+        check_rrd(out / "recordings" / f"{row_id}.rrd")

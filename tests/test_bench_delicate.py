@@ -17,7 +17,7 @@ from tolins.rollouts.episodes import Episode, episode_from_dict, episode_to_dict
 def _config(out, **kwargs) -> BenchConfig:
     """The experts' row only, no other section: the delicate table's experts."""
     options = {"profile": "tiny", "rows": "C2.1", "study": False, "robustness": False}
-    return BenchConfig(**{**options, "robot": False, "out": str(out), **kwargs})
+    return BenchConfig(**{**options, "robot": False, "figures": False, "out": str(out), **kwargs})
 
 
 @pytest.mark.slow

@@ -25,7 +25,9 @@ ROWS = "C1.1,C2.1"
 
 
 def _config(out: Path) -> BenchConfig:
-    return BenchConfig(profile="tiny", backend="kinematic", rows=ROWS, out=str(out), study=False)
+    return BenchConfig(
+        profile="tiny", backend="kinematic", rows=ROWS, out=str(out), study=False, figures=False
+    )
 
 
 def _run(out: Path) -> tuple[object, list[str]]:

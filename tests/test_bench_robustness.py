@@ -86,7 +86,7 @@ def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tiny_benc
     assert "## Robustness (beyond the paper)" in text and "| π_φ* |" in text
     assert _png_size(tmp_path / "robustness.png") > 0
 
-    again = run_bench(config, progress=False, log=lambda _: None)
+    again = run_bench(replace(config, figures=False), progress=False, log=lambda _: None)
     assert all(name in again.cached for name in names)
     assert again.robustness == table
 
@@ -101,7 +101,13 @@ def test_tiny_robustness_runs_end_to_end_and_is_cached_on_a_second_run(tiny_benc
 
 def test_only_the_experts_when_the_rows_train_no_circle_policy_and_cis_over_seeds(tmp_path):
     config = BenchConfig(
-        profile="tiny", backend="kinematic", rows="C1.1", seeds=2, out=str(tmp_path), study=False
+        profile="tiny",
+        backend="kinematic",
+        rows="C1.1",
+        seeds=2,
+        out=str(tmp_path),
+        study=False,
+        figures=False,
     )
     run = run_bench(config, progress=False, log=lambda _: None)
     assert [p["id"] for p in run.robustness["policies"]] == ["safe", "efficient"]

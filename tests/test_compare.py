@@ -39,7 +39,7 @@ def runs(tiny_bench, tmp_path_factory):
     tiny_bench.copy_stages(root / "bench")
     bench = ["bench", "--profile", "tiny", "--backend", "kinematic", "--rows", ROWS]
     bench += ["--no-study", "--out", str(root / "bench")]
-    assert main([*bench, "--seeds", "1"]) == 0
+    assert main([*bench, "--seeds", "1", "--no-figures"]) == 0  # figures: the second run's
     shutil.copytree(root / "bench", root / "one", ignore=shutil.ignore_patterns("stages"))
     assert main([*bench, "--seeds", "3"]) == 0
     return root / "one", root / "bench"

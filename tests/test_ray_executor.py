@@ -84,7 +84,7 @@ def local_outputs(tiny_bench, tmp_path_factory):
     the local executor, tests/conftest.py), re-reported for these rows."""
     out = tmp_path_factory.mktemp("local")
     tiny_bench.copy_stages(out)
-    run = run_bench(_bench(out), progress=False, log=lambda _: None)
+    run = run_bench(_bench(out, figures=False), progress=False, log=lambda _: None)
     assert sorted(run.cached) == sorted(run.stage_times)  # nothing ran again
     return _outputs(out)
 
@@ -220,6 +220,7 @@ def test_a_two_node_cluster_gives_the_local_executors_results(two_nodes, local_o
         ROWS,
     ]
     command += ["--backend", "kinematic", "--out", str(tmp_path), "--executor", "ray"]
+    command += ["--no-figures"]  # the timeline of a Ray run: the test above
     done = subprocess.run(
         [*command, "--address", two_nodes],
         env={**os.environ, **RAY_ENV},

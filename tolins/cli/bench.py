@@ -98,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
     print(format_results_table(bench.results))
     print("\nThe paper's claims in this run:")
     print(format_claims(bench.claims))
-    print(f"\n{bench.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json and plots")
+    plots = " and plots" if config.figures else ""
+    print(f"\n{bench.wall_s / 60:.1f} min; wrote {config.out}/results.md, results.json{plots}")
     return 0
 
 

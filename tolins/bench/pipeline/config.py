@@ -36,6 +36,9 @@ class BenchConfig:
             ``tolins[robot]``).
         delicate: Run the delicate-pins table (:mod:`tolins.bench.table.delicate`; MuJoCo
             only).
+        figures: Draw the figures (the PNGs that results.md shows); without them a run
+            writes its results, results.md and recordings only (a re-report of a finished
+            bench takes seconds fewer) and removes an earlier run's figures.
         workers: Threads evaluating rows side by side (results do not depend on it).
         executor: ``local`` (this process) or ``ray`` (Ray tasks; ``tolins[ray]``): where
             the stages run (:mod:`tolins.bench.pipeline.executor`; results do not depend on it).
@@ -52,6 +55,7 @@ class BenchConfig:
     robustness: bool = True
     robot: bool = True
     delicate: bool = True
+    figures: bool = True
     workers: int = 2
     executor: str = "local"
     address: str | None = None

@@ -91,14 +91,14 @@ def plot_run_json(path: str | Path, run_json: str | Path) -> Path:
 
 def write_timeline(out: str | Path, run: BenchRun) -> list[Path]:
     """Add ``stages`` (:attr:`BenchRun.stage_times`) and ``executor`` to ``out/run.json``;
-    draw ``out/timeline.png`` if any stage ran in this run."""
+    draw ``out/timeline.png`` if any stage ran in this run (and the run draws figures)."""
     out = Path(out)
     record = json.loads((out / "run.json").read_text())
     record["executor"] = {"name": run.config.executor, "address": run.config.address}
     record["stages"] = run.stage_times
     written = [atomic_json(out / "run.json", record)]
     rows = timeline_rows(run.stage_times)
-    if rows:
+    if rows and run.config.figures:
         ran = sum(row["end"] - row["start"] for row in rows) / 60
         title = (
             f"tolins bench --profile {run.config.profile} --executor {run.config.executor}: "

@@ -19,6 +19,29 @@ if TYPE_CHECKING:
     from tolins.bench.pipeline.config import BenchRun
 
 
+#: The figures a run draws into its folder (besides ``claims/`` and ``force_profiles/``).
+FIGURES = (
+    "table.png",
+    "learning_curves.png",
+    "env_step_curves.png",
+    "trajectories.png",
+    "tolerance_images.png",
+    "robustness.png",
+    "inference_study.png",
+    "timeline.png",
+)
+
+
+def remove_figures(out: Path) -> None:
+    """Remove the figures of an earlier run from ``out`` (a run without figures: they would
+    read as this run's)."""
+    for name in FIGURES:
+        (out / name).unlink(missing_ok=True)
+    for folder in ("claims", "force_profiles"):
+        for path in (out / folder).glob("*.png"):
+            path.unlink()
+
+
 def write_figures(run: BenchRun, out: Path, step_curves: dict[str, Curve]) -> list[Path]:
     """Draw every figure of ``run`` into ``out`` (``step_curves``: its stages'
     :func:`~tolins.bench.table.baselines.env_step_curves`); the paths written."""

@@ -243,6 +243,17 @@ def format_markdown(
             "",
             format_backends(config.backend, run.results, *other),
         ]
+    if not config.figures:  # `--no-figures`: no links to figures it did not draw
+        parts = [part for part in parts if not (part.startswith("![") and part.endswith(".png)"))]
+        parts += [
+            "",
+            "## Recordings",
+            "",
+            "`recordings/{ID}.rrd`: evaluation episodes of each row; "
+            "`tolins replay recordings/C2.3.rrd` (figures: run again without `--no-figures`).",
+            "",
+        ]
+        return "\n".join(parts)
     parts += [
         "",
         "## Figures and recordings",
@@ -305,4 +316,6 @@ def _command(config) -> str:
     if config.seeds:
         parts.append(f"--seeds {config.seeds}")
     parts.append(f"--out {config.out}")
+    if not config.figures:
+        parts.append("--no-figures")
     return " ".join(parts)

@@ -12,7 +12,7 @@ from tolins.atomic import atomic_json, atomic_write
 from tolins.bench.jobs import study
 from tolins.bench.jobs.row_evaluation import RECORDING, stage_name
 from tolins.bench.machine import machine
-from tolins.bench.reports.figures import write_figures
+from tolins.bench.reports.figures import remove_figures, write_figures
 from tolins.bench.reports.markdown import format_markdown, stage_minutes
 from tolins.bench.reports.robustness import plot_robustness
 from tolins.bench.store.integrity import read_stage_curves, stage_file
@@ -46,19 +46,24 @@ def write_reports(run: BenchRun, seeds: int) -> list[Path]:
         atomic_json(out / "results.json", document),
         atomic_json(out / f"results.{backend}.json", document),
     ]
+    figures = run.config.figures
+    if not figures:
+        remove_figures(out)
     if run.study is not None:
         written.append(atomic_json(out / "inference.json", run.study))
-        written.append(_copy(run.stage_folders[study.NAME] / study.PLOT, out))
+        if figures:
+            written.append(_copy(run.stage_folders[study.NAME] / study.PLOT, out))
     else:  # an earlier run's study would read as this run's (its stage stays cached)
         (out / "inference.json").unlink(missing_ok=True)
         (out / "inference_study.png").unlink(missing_ok=True)
     written += _recordings(run, out)
-    if run.robustness is not None:
+    if run.robustness is not None and figures:
         written.append(plot_robustness(out / "robustness.png", run.robustness))
     else:  # an earlier run's table would read as this run's
         (out / "robustness.png").unlink(missing_ok=True)
     curves = env_step_curves(run.stage_folders, read_stage_curves)
-    written += write_figures(run, out, curves)
+    if figures:
+        written += write_figures(run, out, curves)
     written.append(atomic_json(out / "curves.json", curves_json(curves)))
     facts = machine()
     written.append(atomic_json(out / "run.json", _run_record(run, seeds, facts)))

@@ -261,7 +261,7 @@ def check_claims(
                 (
                     f"unequal budgets: PPO/SAC {budgets[0]:,} env steps, RS-GAIL's π_n up to "
                     f"{budgets[1]:,} (after BC on expert demonstrations); the pairs below only "
-                    "show where each stands at its own budget (env_step_curves.png)"
+                    "show where each stands at its own budget (their curves: the deep-RL section)"
                 ),
             )
         checks.append(ClaimCheck(claim, verdict, comparisons, seeds, note))

@@ -30,7 +30,13 @@ from tolins.paper import CONTROL_DT, HORIZON, POSE_NOISE_STD
 from tolins.physics.panda import check_gain_range
 from tolins.physics.protocol import BackendState
 from tolins.physics.randomization import PhysicsDraw, PhysicsRandomization
-from tolins.physics.registry import check_elastic_pins, check_robot, simulator, taking_defect
+from tolins.physics.registry import (
+    check_elastic_pins,
+    check_robot,
+    simulator,
+    simulator_place,
+    taking_defect,
+)
 from tolins.physics.schedule import check_control_dt
 from tolins.physics.versions import PhysicsVersion, check_version_robot, physics_version
 
@@ -256,8 +262,7 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
     physics or defect kind."""
     chosen = simulator(backend, single=single, robot=settings.robot)
     cls = chosen.single if single else chosen.batch
-    robot = "" if settings.robot == "free" else f", robot={settings.robot!r}"
-    on = f"backend={backend!r}{robot}"
+    on = simulator_place(backend, settings.robot)
     if settings.elastic is not None:
         check_elastic_pins(cls, on if single else f"{on} in the vector env")
     if settings.randomization is not None and not cls.supports_randomization:

@@ -138,11 +138,13 @@ def make_backend(
     chosen = simulator(name, single=True, robot=robot)
     if pins is None:
         return chosen.single(spec, control_dt, physics_version=physics_version)
-    check_elastic_pins(chosen.single, _where(name, robot))
+    check_elastic_pins(chosen.single, simulator_place(name, robot))
     return chosen.single(spec, control_dt, physics_version=physics_version, pins=pins)
 
 
-def _where(name: str, robot: str) -> str:
+def simulator_place(name: str, robot: str) -> str:
+    """The simulator ``name`` with ``robot`` as an error names it, e.g. ``backend='mujoco',
+    robot='panda'`` (the free body unnamed)."""
     return f"backend={name!r}" + ("" if robot == "free" else f", robot={robot!r}")
 
 
@@ -173,6 +175,6 @@ def make_batch(
     given = {"num_threads": num_threads, "device": device, "persistent": persistent}
     options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
     if pins is not None:
-        check_elastic_pins(cls, f"{_where(name, robot)} in the vector env")
+        check_elastic_pins(cls, f"{simulator_place(name, robot)} in the vector env")
         options["pins"] = pins
     return cls(socket, num_envs, control_dt, physics_version=physics_version, **options)

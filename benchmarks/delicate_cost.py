@@ -3,6 +3,7 @@
 Usage::
 
     python benchmarks/delicate_cost.py [--episodes 10] [--rounds 2] [--sockets 2,8]
+        [--robot free|panda]
 
 For each socket (``CircularSocket(2, cols)``, the paper's 200 µm) and each policy (the safe
 and the efficient expert, and random actions pressing down from just over the board), the
@@ -14,6 +15,10 @@ alternating in blocks so that the machine's load falls on all alike:
 * ``delicate``: ``tolins/Circle2x{cols}Delicate-v2``'s (elastic-plastic pins: on the
   contact step chunks of physics steps in which no pin can reach yield, the return mapping
   after each; in free flight the longer steps, the pins held as they are).
+
+With ``--robot panda`` the Panda holds the part, in two envs: ``rigid -v3``
+(``tolins/Circle2x{cols}Panda-v3``) and ``delicate`` (the same with
+``pins="elastic-plastic"``: the return mapping after every physics step).
 
 Printed per row: ms of thread CPU time per control step (the best of ``--rounds`` rounds),
 the delicate env's over each rigid one's, the success rates, and the largest permanent tip
@@ -32,11 +37,17 @@ from tolins.geometry.specs import CircularSocket
 from tolins.paper import A_MAX
 from tolins.policies.experts import EXPERTS
 
-#: The envs compared: label -> keywords.
+#: The envs compared per robot, rigid ones first: label -> keywords.
 VARIANTS = {
-    "rigid -v2": {"physics_version": 2},
-    "rigid -v1": {"physics_version": 1},
-    "delicate": {"physics_version": 2, "pins": "elastic-plastic"},
+    "free": {
+        "rigid -v2": {"physics_version": 2},
+        "rigid -v1": {"physics_version": 1},
+        "delicate": {"physics_version": 2, "pins": "elastic-plastic"},
+    },
+    "panda": {
+        "rigid -v3": {"robot": "panda", "physics_version": 3},
+        "delicate": {"robot": "panda", "physics_version": 3, "pins": "elastic-plastic"},
+    },
 }
 
 
@@ -79,17 +90,23 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--sockets", default="2,8", help="columns of the 2*n sockets")
+    parser.add_argument("--robot", choices=sorted(VARIANTS), default="free")
     args = parser.parse_args(argv)
     seeds = range(args.episodes)
+    variants = VARIANTS[args.robot]
+    rigid = [label for label in variants if label != "delicate"]
     print(f"{args.episodes} episodes per row, best of {args.rounds} rounds, thread CPU time\n")
     print(
-        "| socket | policy | rigid -v2 (ms/step) | rigid -v1 | delicate | × rigid -v2 "
-        "| × rigid -v1 | success rigid / delicate | max bend (µm) | damaged |"
+        f"| socket | policy | {rigid[0]} (ms/step) | "
+        + "".join(f"{label} | " for label in rigid[1:])
+        + "delicate | "
+        + "".join(f"× {label} | " for label in rigid)
+        + f"success {rigid[0]} / delicate | max bend (µm) | damaged |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---" * (6 + 2 * len(rigid)) + "|")
     for cols in (int(c) for c in args.sockets.split(",")):
         socket = CircularSocket(2, cols)
-        envs = {label: InsertionEnv(socket, **kw) for label, kw in VARIANTS.items()}
+        envs = {label: InsertionEnv(socket, **kw) for label, kw in variants.items()}
         for policy_name in (*EXPERTS, "random"):
             best = dict.fromkeys(envs, np.inf)
             infos: dict[str, list[dict]] = {}
@@ -101,11 +118,11 @@ def main(argv: list[str] | None = None) -> None:
             delicate = infos["delicate"]
             bend = max(float(np.hypot(*i["pin_bend"].T).max()) for i in delicate)
             damaged = sum(i["damaged"] for i in delicate)
+            times = "".join(f"{best[label]:.2f} | " for label in variants)
+            ratios = "".join(f"{best['delicate'] / best[label]:.2f} | " for label in rigid)
             print(
-                f"| 2*{cols} | {policy_name} | {best['rigid -v2']:.2f} | {best['rigid -v1']:.2f} "
-                f"| {best['delicate']:.2f} | {best['delicate'] / best['rigid -v2']:.2f} "
-                f"| {best['delicate'] / best['rigid -v1']:.2f} "
-                f"| {success['rigid -v2']} / {success['delicate']} | {1e3 * bend:.1f} "
+                f"| 2*{cols} | {policy_name} | {times}{ratios}"
+                f"{success[rigid[0]]} / {success['delicate']} | {1e3 * bend:.1f} "
                 f"| {damaged}/{len(delicate)} |",
                 flush=True,
             )

@@ -52,7 +52,7 @@ def _push(material: object = None, clearance: float = 0.2) -> dict[str, float]:
             data.xfrc_applied[body] = np.concatenate([force, np.cross(arm, force)])
             state = stepper.step(still, 1)
             assert state.error is None
-            rotation = np.hypot(*data.qpos[stepper.layout.pin_hinges[0]])
+            rotation = np.hypot(*data.qpos[stepper.layout.elastic.hinges[0]])
             plastic = float(np.hypot(*stepper.plasticity.plastic[0]))
             moment = load * length * np.cos(rotation)
             records.append((phase, load, state.pin_deflection[0, 0], plastic, rotation, moment))
@@ -299,10 +299,6 @@ def test_dm_control_steps_as_the_gym_id() -> None:
         (
             lambda: tolins.make_vec("tolins/Circle2x2Delicate-v2", 2, backend="warp"),
             r"not supported on backend='warp' in the vector env",
-        ),
-        (
-            lambda: InsertionEnv(CircularSocket(2, 2), robot="panda", physics_version=2, **ELASTIC),
-            r"not supported on backend='mujoco', robot='panda'",
         ),
         (
             lambda: InsertionEnv(CircularSocket(2, 2)).reset(options={"keep_part": True}),

@@ -161,7 +161,7 @@ class PandaInsertionPhysics(InsertionPhysics):
     def compile(
         cls, spec: SocketSpec, version: PhysicsVersion, pins: ElasticPins | None = None
     ) -> dm_mujoco.wrapper.MjModel:
-        return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version))
+        return dm_mujoco.wrapper.MjModel(compile_panda_world(spec, version, pins))
 
     def set_grasp(self, offset: np.ndarray) -> None:
         self.stepper.set_grasp(offset)

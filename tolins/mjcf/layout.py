@@ -71,6 +71,24 @@ def bend_fields(spec: SocketSpec) -> tuple[str, ...]:
 
 
 @dataclass(frozen=True, eq=False)
+class ElasticPinLayout:
+    """Where a model's elastic-plastic pins (:mod:`tolins.mjcf.elastic_pins`) are
+    (:func:`elastic_pin_layout`).
+
+    Attributes:
+        hinges: ``qpos`` address of each pin's root hinges ``(n_pins, 2)`` ``[bx, by]``.
+        equalities: Id of the joint equality holding each of those hinges ``(n_pins, 2)``.
+        yield_rotation: Each pin's root rotation at first yield ``(n_pins,)`` (rad).
+        length: Each pin's free length ``(n_pins,)`` (mm).
+    """
+
+    hinges: np.ndarray
+    equalities: np.ndarray
+    yield_rotation: np.ndarray
+    length: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class ModelLayout:
     """The addresses of one compiled socket model (:func:`model_layout`).
 
@@ -84,13 +102,8 @@ class ModelLayout:
             ``ctrl`` alike): ``qpos = pose[joint_pose]``.
         pose_joint: The joint of each pose component: ``pose = qpos[pose_joint]``.
         pin_by_geom: Pin index by geom id (of the pins only).
-        pin_hinges: ``qpos`` address of each pin's root hinges ``(n_pins, 2)`` ``[bx, by]``
-            (elastic-plastic pins, :mod:`tolins.mjcf.elastic_pins`), or ``None`` (rigid).
-        pin_equalities: Id of the joint equality holding each of those hinges
-            ``(n_pins, 2)``, or ``None``.
-        pin_yield_rotation: Each pin's root rotation at first yield ``(n_pins,)`` (rad), or
-            ``None``.
-        pin_length: Each pin's free length ``(n_pins,)`` (mm), or ``None``.
+        elastic: Where its elastic-plastic pins' hinges are (:func:`elastic_pin_layout`),
+            or ``None`` (rigid pins).
     """
 
     n_pins: int
@@ -100,10 +113,7 @@ class ModelLayout:
     pin_geoms: tuple[int, ...]
     joint_pose: np.ndarray
     pose_joint: np.ndarray
-    pin_hinges: np.ndarray | None = None
-    pin_equalities: np.ndarray | None = None
-    pin_yield_rotation: np.ndarray | None = None
-    pin_length: np.ndarray | None = None
+    elastic: ElasticPinLayout | None = None
     pin_by_geom: dict[int, int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -132,13 +142,13 @@ def model_layout(model: mujoco.MjModel) -> ModelLayout:
         raise RuntimeError("the pins' touch sensors are missing or not stored contiguously")
     pose_joint = np.array([model.joint(name).qposadr[0] for name in POSE_JOINTS], dtype=np.intp)
     joints = np.array([model.joint(name).id for name in POSE_JOINTS])
-    hinges, equalities = _pin_hinges(model, len(touch))
+    elastic = elastic_pin_layout(model)
     # One actuator per joint, in joint order, each with one activation (act = qpos[:nu]),
     # the workpiece's joints first (then any pin hinges).
     n_pose = len(POSE_JOINTS)
     servos_in_order = (
         model.nu == model.na == n_pose
-        and model.nq == n_pose + (0 if hinges is None else hinges.size)
+        and model.nq == n_pose + (0 if elastic is None else elastic.hinges.size)
         and np.array_equal(model.actuator_trnid[:, 0], np.sort(joints))
         and np.array_equal(model.jnt_qposadr[np.sort(joints)], np.arange(n_pose))
         and np.array_equal(model.actuator_actadr, np.arange(model.nu))
@@ -154,10 +164,7 @@ def model_layout(model: mujoco.MjModel) -> ModelLayout:
         pin_geoms=tuple(int(model.geom(pin_geom_name(i)).id) for i in range(len(touch))),
         joint_pose=np.argsort(pose_joint),
         pose_joint=pose_joint,
-        pin_hinges=hinges,
-        pin_equalities=equalities,
-        pin_yield_rotation=None if hinges is None else _numeric(model, YIELD_ROTATION),
-        pin_length=None if hinges is None else _numeric(model, LENGTH),
+        elastic=elastic,
     )
 
 
@@ -167,13 +174,21 @@ def _numeric(model: mujoco.MjModel, name: str) -> np.ndarray:
     return np.array(model.numeric_data[numeric.adr[0] : numeric.adr[0] + numeric.size[0]])
 
 
-def _pin_hinges(model: mujoco.MjModel, n_pins: int) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """``qpos`` addresses and equality ids of the pins' root hinges ``(n_pins, 2)``, or
-    ``(None, None)`` for rigid pins."""
-    if model.njnt == len(POSE_JOINTS):
-        return None, None
+def elastic_pin_layout(model: mujoco.MjModel) -> ElasticPinLayout | None:
+    """Where the elastic-plastic pins of ``model`` are, or ``None`` if its pins are rigid:
+    a socket model of :func:`~tolins.mjcf.model.make_mjcf` or a world that holds one (the
+    Panda's), by the names the pins' hinges, equalities and numerics have there."""
+    try:
+        model.joint(hinge_name(0, HINGES[0][0]))
+    except KeyError:
+        return None
+    pins = range(len(touch_addresses(model)))
     suffixes = [s for s, _ in HINGES]
-    joints = [[model.joint(hinge_name(i, s)).id for s in suffixes] for i in range(n_pins)]
-    equalities = [[model.equality(equality_name(i, s)).id for s in suffixes] for i in range(n_pins)]
-    hinges = model.jnt_qposadr[np.array(joints, dtype=np.intp)].astype(np.intp)
-    return hinges, np.array(equalities, dtype=np.intp)
+    joints = [[model.joint(hinge_name(i, s)).id for s in suffixes] for i in pins]
+    equalities = [[model.equality(equality_name(i, s)).id for s in suffixes] for i in pins]
+    return ElasticPinLayout(
+        hinges=model.jnt_qposadr[np.array(joints, dtype=np.intp)].astype(np.intp),
+        equalities=np.array(equalities, dtype=np.intp),
+        yield_rotation=_numeric(model, YIELD_ROTATION),
+        length=_numeric(model, LENGTH),
+    )

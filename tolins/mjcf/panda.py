@@ -25,6 +25,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.workspace import PIN_LENGTH
 from tolins.mjcf.model import CARRIER_THICKNESS, SOLIMP, SOLREF, make_mjcf
@@ -250,6 +251,7 @@ def panda_world(
     *,
     board_body: bool = True,
     firm_grip: bool = False,
+    elastic: ElasticPins | None = None,
 ) -> mujoco.MjSpec:
     """``socket``'s board and workpiece with the Panda holding the part: the workpiece on a
     free joint (its servos gone) with a handle on its carrier, gravity on, and the arm at
@@ -259,8 +261,9 @@ def panda_world(
     :data:`WRIST_FORCE` and :data:`WRIST_TORQUE` sit at the flange, beside the model's own
     ``force``/``torque`` at the pins (the true contact wrench on the part). ``board_body``
     as :func:`~tolins.mjcf.model.make_mjcf`'s. ``firm_grip``: the pads touch the handle
-    alone, through contact pairs of :data:`FIRM_GRIP_IMPEDANCE` (:func:`grip_firmly`)."""
-    world = mujoco.MjSpec.from_string(make_mjcf(socket, board_body=board_body))
+    alone, through contact pairs of :data:`FIRM_GRIP_IMPEDANCE` (:func:`grip_firmly`).
+    ``elastic``: elastic-plastic pins, as :func:`~tolins.mjcf.model.make_mjcf`'s."""
+    world = mujoco.MjSpec.from_string(make_mjcf(socket, board_body=board_body, elastic=elastic))
     workpiece = world.body("workpiece")
     for joint in list(workpiece.joints):
         world.delete(joint)
@@ -278,6 +281,9 @@ def panda_world(
     )
     workpiece.mass += HANDLE_MASS  # the body's explicit inertial: geoms add no mass to it
     world.option.gravity = GRAVITY
+    # MuJoCo's default (dense rows for a world of this size): the arm's rows are dense, and
+    # elastic-plastic pins' sparse ones (``make_mjcf``'s) cost 15 % more here.
+    world.option.jacobian = mujoco.mjtJacobian.mjJAC_AUTO
     arm = panda_spec()
     arm.option.timestep = world.option.timestep
     for actuator in arm.actuators:  # the files' metadata for their own controllers

@@ -47,6 +47,7 @@ from tolins.mjcf.panda import (
     handle_centre_height,
 )
 from tolins.physics.law_state import pack_gains
+from tolins.physics.plasticity import PinPlasticity
 from tolins.physics.servo import run_plan
 
 #: The IK's start (rad): of the grasps over the board's centre reached from 300 random
@@ -304,13 +305,17 @@ def place_grasp(
     arm: Arm,
     pose: np.ndarray,
     offset: np.ndarray | None = None,
+    plasticity: PinPlasticity | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reset ``data`` with the hand around the handle of a part at ``pose`` ``[x, y, theta,
     z]`` (tips' height z; fingers 1 mm off each side), the fingers open. With ``offset``
     ``[dx, dy, dyaw]`` (mm, rad, in the grip frame) the part sits that far off in the hand:
-    at ``pose`` moved by the offset, where the robot believes it at ``pose``. Returns the
-    grip site's target position, rotation and the posture (the IK's joint angles)."""
+    at ``pose`` moved by the offset, where the robot believes it at ``pose``; its
+    elastic-plastic pins (``plasticity``) at rest at their plastic set. Returns the grip
+    site's target position, rotation and the posture (the IK's joint angles)."""
     mujoco.mj_resetData(model, data)
+    if plasticity is not None:
+        plasticity.place(data.qpos, data.qvel)
     x, y, theta, z = (float(v) for v in pose)
     dx, dy, dyaw = (0.0, 0.0, 0.0) if offset is None else (float(v) for v in offset)
     c, s = np.cos(theta), np.sin(theta)
@@ -334,6 +339,7 @@ def close_fingers(
     seconds: float,
     every: int,
     law: Callable[[], None],
+    plasticity: PinPlasticity | None = None,
 ) -> None:
     """Close the fingers on the part with ``force`` (N) each for ``seconds``, ``law()``
     setting the arm's torques before every ``every`` physics steps, with gravity off: the
@@ -341,14 +347,14 @@ def close_fingers(
     starts where the robot believes it (a part held by a soft constraint instead is
     pushed tens of µm off by the closing fingers and keeps the offset). Gravity, in
     ``model``, is back on when it returns; ``law`` must not compensate the part's weight
-    meanwhile."""
+    meanwhile. ``plasticity``: the part's elastic-plastic pins (:func:`run_plan`'s)."""
     gravity = model.opt.gravity.copy()
     model.opt.gravity[:] = 0.0
     try:
         data.ctrl[arm.finger_motors] = -force / FORCE_SCALE
         steps = round(seconds / model.opt.timestep)
         plan = [(min(every, steps - start), True, False) for start in range(0, steps, every)]
-        run_plan(model, data, plan, law, _nothing)
+        run_plan(model, data, plan, law, _nothing, plasticity)
     finally:
         model.opt.gravity[:] = gravity
     mujoco.mj_forward(model, data)

@@ -43,11 +43,12 @@ import mujoco
 import numpy as np
 
 from tolins.geometry.defects import DEFECT_KINDS
+from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.geometry.workspace import POSE_HIGH, POSE_LOW
 from tolins.mjcf import FORCE_SCALE
-from tolins.mjcf.layout import touch_addresses
+from tolins.mjcf.layout import elastic_pin_layout, touch_addresses
 from tolins.mjcf.model import FORCE_SENSOR, TORQUE_SENSOR
 from tolins.mjcf.panda import GRAVITY, handle_centre_height, panda_world
 from tolins.paper import A_MAX
@@ -66,6 +67,7 @@ from tolins.physics.arm import (
 from tolins.physics.compiled import SocketCache
 from tolins.physics.law_state import STATE, STATE_SIZE, advance_target
 from tolins.physics.mujoco import check_threads, default_threads
+from tolins.physics.plasticity import PinPlasticity
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import contact_chunks, control_plan
@@ -87,12 +89,20 @@ DROPPED = 3.0
 
 
 def compile_panda_world(
-    socket: SocketSpec, physics_version: int | PhysicsVersion = 2
+    socket: SocketSpec,
+    physics_version: int | PhysicsVersion = 2,
+    pins: ElasticPins | None = None,
 ) -> mujoco.MjModel:
     """The compiled Panda world of ``socket`` for a physics version (its board in the world
-    body from version 2 on, a firm grip from version 3, :mod:`tolins.physics.versions`)."""
+    body from version 2 on, a firm grip from version 3, :mod:`tolins.physics.versions`);
+    ``pins``: elastic-plastic pins (``None``: rigid)."""
     version = physics_version_of(physics_version)
-    world = panda_world(socket, board_body=not version.board_in_world, firm_grip=version.firm_grip)
+    world = panda_world(
+        socket,
+        board_body=not version.board_in_world,
+        firm_grip=version.firm_grip,
+        elastic=pins,
+    )
     return world.compile()
 
 
@@ -254,6 +264,9 @@ class PandaSimulations:
         self._inputs: list[LawInputs | None] = [None] * n
         self._packed_gains: list[dict[float, tuple[Gains, np.ndarray]]] = [{} for _ in range(n)]
         self._pool: ThreadPoolExecutor | None = None
+        self._pins = elastic_pin_layout(model)
+        #: Each simulation's elastic-plastic pins (made for its model when first needed).
+        self.plasticity: list[PinPlasticity | None] = [None] * n
         #: Whether the law runs compiled (numba), else in numpy: the same law within
         #: rounding (:mod:`tolins.physics.compiled_law`), the numpy one about 15 times slower.
         self.compiled = COMPILED
@@ -266,11 +279,16 @@ class PandaSimulations:
         self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
     ) -> BatchState:
         """Grasp each part of ``ids`` at ``poses[k]`` (off by its grasp error) and close
-        the fingers on it: the state then. One simulation after another: the fingers close
+        the fingers on it: the state then (``keep_part[k]``: its elastic-plastic pins as
+        bent as they are, else straight). One simulation after another: the fingers close
         with gravity off in the model, which simulations may share."""
+        keep = np.zeros(len(ids), dtype=bool) if keep_part is None else keep_part
         for k, i in enumerate(ids.tolist()):
             model, data = self.models[i], self.datas[i]
-            target, rot, posture = place_grasp(model, data, self.arm, poses[k], self.grasp[i])
+            pins = self._plasticity(i)
+            if pins is not None:
+                pins.assign(pins.plastic if keep[k] else None)
+            target, rot, posture = place_grasp(model, data, self.arm, poses[k], self.grasp[i], pins)
             self.target[i], self.posture[i] = target, posture
             self.yaw[i] = math.atan2(rot[1, 0], rot[0, 0])
             self.twist[i] = 0.0
@@ -282,8 +300,22 @@ class PandaSimulations:
                 SETTLE,
                 self.every,
                 functools.partial(self._update_law, i, 0.0, payload=0.0),
+                pins,
             )
         return self.state(ids, self.summed_touch(ids), None)
+
+    def _plasticity(self, i: int) -> PinPlasticity | None:
+        """Simulation ``i``'s elastic-plastic pins on its model now (``None``: rigid pins):
+        made anew when its model changed, taking the plastic set along."""
+        if self._pins is None:
+            return None
+        pins = self.plasticity[i]
+        if pins is None or pins.model is not self.models[i]:
+            made = PinPlasticity(self.models[i], self._pins)
+            if pins is not None:
+                made.assign(pins.plastic)
+            pins = self.plasticity[i] = made
+        return pins
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         """Track ``velocities[k]`` ``[ux, uy, uθ, uz]`` with simulation ``ids[k]`` for one
@@ -330,7 +362,7 @@ class PandaSimulations:
                 peak = force
 
         law = functools.partial(self._update_law, i, self._span)
-        run_plan(self.models[i], self.datas[i], self.plan, law, read)
+        run_plan(self.models[i], self.datas[i], self.plan, law, read, self._plasticity(i))
         return peak
 
     def close(self) -> None:
@@ -417,7 +449,16 @@ class PandaSimulations:
             wrench[k] = np.array([force[0], force[1], torque[2], force[2]]) * FORCE_SCALE
             sensed_pose[k] = nominal_pose(data, self.arm)
             sensed_wrench[k] = wrist_wrench(data, self.arm, self._held_mass)
-        return BatchState(pose, wrench, peak_force, errors, sensed_pose, sensed_wrench)
+        state = BatchState(pose, wrench, peak_force, errors, sensed_pose, sensed_wrench)
+        if self._pins is None:
+            return state
+        pins = [self._plasticity(i) for i in ids.tolist()]
+        n_pins = len(self._pins.length)
+        bends = np.array([p.bend() for p in pins]).reshape(n, n_pins, 2)
+        deflections = np.array(
+            [p.deflection(self.datas[i].qpos) for p, i in zip(pins, ids.tolist(), strict=True)]
+        ).reshape(n, n_pins, 2)
+        return dataclasses.replace(state, pin_bend=bends, pin_deflection=deflections)
 
 
 class PandaBatch(Capabilities):
@@ -442,11 +483,14 @@ class PandaBatch(Capabilities):
         num_threads: Threads a control step runs the simulations on, at most the
             machine's cores (:func:`~tolins.physics.mujoco.check_threads`); default: the
             cores this process may run on. Results do not depend on it.
+        pins: Elastic-plastic pins (``pins="elastic-plastic"``), or ``None``: rigid. Then
+            each simulation runs on a model of its own, which holds its plastic set.
     """
 
     supports_render = True
     supports_randomization = True
     supports_touch_points = False
+    supports_elastic_pins = True
     defect_kinds = frozenset(DEFECT_KINDS) - {"blocked"}
     batch_options = frozenset({"num_threads"})
 
@@ -460,15 +504,17 @@ class PandaBatch(Capabilities):
         gains: Gains | None = None,
         contact_checks: int | None = None,
         num_threads: int | None = None,
+        pins: ElasticPins | None = None,
     ) -> None:
         self.num_envs = check_int("num_envs", num_envs, minimum=1)
         threads = check_threads(default_threads() if num_threads is None else num_threads)
         self.version = physics_version_of(physics_version)
-        build = functools.partial(compile_panda_world, physics_version=self.version)
+        self.elastic = pins is not None
+        build = functools.partial(compile_panda_world, physics_version=self.version, pins=pins)
         self.model = build(socket)
         self._compiled = SocketCache(build, socket, 2 * self.num_envs, own=self.model)
         self._sockets = [socket] * self.num_envs
-        models = [self.model] * self.num_envs
+        models = [self._own(self.model) for _ in range(self.num_envs)]
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
         self.arm = Arm(self.model, gains or default_gains(self.version))
         self.sims = PandaSimulations(
@@ -479,10 +525,15 @@ class PandaBatch(Capabilities):
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
             return
-        model = self._compiled.get(socket)
+        model = self._own(self._compiled.get(socket))
         self._sockets[index] = socket
         self.sims.models[index] = model
         self.sims.datas[index] = mujoco.MjData(model)
+
+    def _own(self, model: mujoco.MjModel) -> mujoco.MjModel:
+        """``model`` for one simulation: with elastic-plastic pins a copy (its ``eq_data``
+        holds that simulation's plastic set), else the shared model itself."""
+        return copy.copy(model) if self.elastic else model
 
     def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
         """Run simulation ``index`` with a randomised-physics ``draw`` (``None``: nominal):
@@ -492,7 +543,7 @@ class PandaBatch(Capabilities):
         base = self._compiled.get(self._sockets[index])
         sims = self.sims
         if draw is None or not draw.changes_model:
-            sims.models[index], sims.gains[index] = base, self.arm.gains
+            sims.models[index], sims.gains[index] = self._own(base), self.arm.gains
             return
         contact, sims.gains[index] = split_draw(draw, self.arm.gains)
         model = copy.copy(base)
@@ -507,7 +558,9 @@ class PandaBatch(Capabilities):
     def reset(
         self, ids: np.ndarray, poses: np.ndarray, keep_part: np.ndarray | None = None
     ) -> BatchState:
-        return self.sims.reset(np.asarray(ids, dtype=np.intp), np.asarray(poses, dtype=float))
+        keep = None if keep_part is None else np.asarray(keep_part, dtype=bool)
+        ids = np.asarray(ids, dtype=np.intp)
+        return self.sims.reset(ids, np.asarray(poses, dtype=float), keep)
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
         return self.sims.step(np.asarray(ids, dtype=np.intp), velocities)
@@ -531,6 +584,7 @@ class PandaBackend(Capabilities):
     supports_render = True
     supports_randomization = True
     supports_touch_points = False
+    supports_elastic_pins = True
     defect_kinds = PandaBatch.defect_kinds
 
     def __init__(
@@ -540,9 +594,10 @@ class PandaBackend(Capabilities):
         physics_version: int | PhysicsVersion = 2,
         law_rate: int = LAW_RATE,
         gains: Gains | None = None,
+        pins: ElasticPins | None = None,
     ) -> None:
         self.spec = spec
-        self._batch = PandaBatch(spec, 1, control_dt, physics_version, law_rate, gains)
+        self._batch = PandaBatch(spec, 1, control_dt, physics_version, law_rate, gains, pins=pins)
 
     @property
     def model(self) -> mujoco.MjModel:
@@ -565,7 +620,7 @@ class PandaBackend(Capabilities):
         self._batch.set_grasp(0, offset)
 
     def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
-        return self._batch.reset(_ONE, np.reshape(pose, (1, 4))).row(0)
+        return self._batch.reset(_ONE, np.reshape(pose, (1, 4)), np.array([keep_part])).row(0)
 
     def step(self, velocity: np.ndarray) -> BackendState:
         return self._batch.step(_ONE, np.reshape(velocity, (1, 4))).row(0)
@@ -605,8 +660,10 @@ class PandaStepper:
         self._sims.gains[0] = gains or self.arm.gains
 
     def reset(self, pose: np.ndarray, keep_part: bool = False) -> BackendState:
-        """Grasp the part at ``pose`` ``[x, y, theta, z]`` (as :meth:`PandaSimulations.reset`)."""
-        return self._sims.reset(_ONE, np.reshape(np.asarray(pose, dtype=float), (1, 4))).row(0)
+        """Grasp the part at ``pose`` ``[x, y, theta, z]`` (as :meth:`PandaSimulations.reset`;
+        ``keep_part``: its elastic-plastic pins as bent as they are)."""
+        pose = np.reshape(np.asarray(pose, dtype=float), (1, 4))
+        return self._sims.reset(_ONE, pose, np.array([keep_part])).row(0)
 
     def command(self, velocity: np.ndarray) -> None:
         """Set the velocity ``[ux, uy, utheta, uz]`` (mm/s, rad/s) of the next steps."""
@@ -615,10 +672,11 @@ class PandaStepper:
     def advance(self, nstep: int) -> BackendState:
         """Track the commanded velocity for ``nstep`` physics steps (one control step)."""
         if nstep != self._sims.nstep:
-            grasp, gains = self._sims.grasp.copy(), self._sims.gains
+            old = self._sims
             control_dt = nstep * self.model.opt.timestep
             self._sims = PandaSimulations(self.arm, [self.model], [self.data], control_dt)
-            self._sims.grasp[:], self._sims.gains = grasp, gains
+            self._sims.grasp[:], self._sims.gains = old.grasp, old.gains
+            self._sims.plasticity = old.plasticity
         return self._sims.step(_ONE, self.velocity[None]).row(0)
 
     def state(self, peak_force: float) -> BackendState:

@@ -30,8 +30,8 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from tolins.mjcf import ModelLayout
 from tolins.mjcf.elastic_pins import tip_offsets
+from tolins.mjcf.layout import ElasticPinLayout
 
 #: Safety factor on how fast a pin's tip moves with the workpiece (the servos' overshoot
 #: within a chunk, a pin's own ringing).
@@ -116,17 +116,17 @@ class PinPlasticity:
     Args:
         model: A model with elastic-plastic pins; its ``eq_data`` holds this simulation's
             plastic set, so each simulation needs its own model.
-        layout: Its :func:`~tolins.mjcf.model_layout` (with ``pin_hinges``).
+        pins: Where its pins are (:func:`~tolins.mjcf.layout.elastic_pin_layout`).
     """
 
-    def __init__(self, model: mujoco.MjModel, layout: ModelLayout) -> None:
+    def __init__(self, model: mujoco.MjModel, pins: ElasticPinLayout) -> None:
         self.model = model
-        self.hinges = layout.pin_hinges
+        self.hinges = pins.hinges
         joints = np.searchsorted(model.jnt_qposadr, self.hinges)
         self.dofs = model.jnt_dofadr[joints].astype(np.intp)
-        self.equalities = layout.pin_equalities
-        self.theta_y = np.ascontiguousarray(layout.pin_yield_rotation, dtype=float)
-        self.lengths = np.asarray(layout.pin_length, dtype=float)
+        self.equalities = pins.equalities
+        self.theta_y = np.ascontiguousarray(pins.yield_rotation, dtype=float)
+        self.lengths = np.asarray(pins.length, dtype=float)
         # Each pin's farthest point from the axis of the workpiece's hinge about z (mm).
         roots = model.body_pos[model.jnt_bodyid[joints[:, 0]], :2]
         self.reach = np.hypot(roots[:, 0], roots[:, 1]) + self.lengths

@@ -109,9 +109,8 @@ def taking_defect(kind: str) -> tuple[str, ...]:
 
 #: Where pins that bend are simulated: the ``allowed`` of every refusal of them.
 ELASTIC_PINS_ON = (
-    "allowed: backend='mujoco' with robot='free' (the single env, the vector env and "
-    "dm_control; the kinematic and Warp simulators have no bending pins, the Panda's stepper "
-    "does not run the pins' return mapping yet)"
+    "allowed: backend='mujoco', the free body's or the Panda's (the single env, the vector env "
+    "and dm_control; the kinematic and Warp simulators have no bending pins)"
 )
 
 

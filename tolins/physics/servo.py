@@ -138,15 +138,22 @@ def run_plan(
     plan: Iterable[tuple[int, bool, bool]],
     update: Callable[[], None],
     read: Callable[[], None],
+    plasticity: PinPlasticity | None = None,
 ) -> None:
     """Step one simulation through ``plan``, segments ``(steps, update, read)`` of physics
     steps: ``update()`` (a control law writing ``data.ctrl``) before each segment marked
     so, ``read()`` after each segment marked so (the Panda's control step and its
-    fingers' closing)."""
+    fingers' closing). With elastic-plastic pins (``plasticity``) the return mapping
+    follows every physics step."""
     for steps, law, reads in plan:
         if law:
             update()
-        mujoco.mj_step(model, data, nstep=steps)
+        if plasticity is None:
+            mujoco.mj_step(model, data, nstep=steps)
+        else:
+            for _ in range(steps):
+                mujoco.mj_step(model, data)
+                plasticity.update(data.qpos)
         if reads:
             read()
 
@@ -298,8 +305,8 @@ class ServoStepper:
         self._limits: ServoLimits | None = None
         self._limits_key: tuple | None = None
         self._bind(model, data)
-        hinges = self.layout.pin_hinges
-        self.plasticity = None if hinges is None else PinPlasticity(model, self.layout)
+        pins = self.layout.elastic
+        self.plasticity = None if pins is None else PinPlasticity(model, pins)
 
     def _bind(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Hold ``model`` and ``data`` and the views into ``data`` that the steps read."""
@@ -312,7 +319,7 @@ class ServoStepper:
         self._wrench = data.sensordata[layout.force]
         self._warnings = data.warning.number
         # What the servos' activations follow: the workpiece's joints (then pin hinges).
-        self._servo_q = data.qpos if layout.pin_hinges is None else data.qpos[: model.nu]
+        self._servo_q = data.qpos if layout.elastic is None else data.qpos[: model.nu]
 
     #: Attributes that view MjData's buffers: pickled, they would become frozen copies.
     _VIEWS = ("_touch", "_wrench", "_warnings", "_servo_q")
@@ -535,7 +542,7 @@ class BatchServo:
             model, num_envs, nthread=num_threads, persistent=persistent
         )
         self.layout = model_layout(model)
-        self.elastic = self.layout.pin_hinges is not None
+        self.elastic = self.layout.elastic is not None
         self.free_flight = free_flight
         self._limits_of: dict[int, tuple[mujoco.MjModel, ServoLimits]] = {}
         self.models: list[mujoco.MjModel] = []
@@ -564,7 +571,7 @@ class BatchServo:
                 if i < len(old) and old[i] is model:
                     plasticity.append(self.plasticity[i])
                     continue
-                plasticity.append(PinPlasticity(model, self.layout))
+                plasticity.append(PinPlasticity(model, self.layout.elastic))
                 if i < len(old):
                     plasticity[-1].assign(self.plasticity[i].plastic)
             self.plasticity = plasticity

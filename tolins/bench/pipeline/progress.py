@@ -62,14 +62,16 @@ TABLES: dict[str, ConditionTable] = {
 #: "``tolins bench`` wall time"), each kind's measured stage time over its budget, the
 #: kinds' relative costs checked against ``reference:quick``'s run (2026-12-03) and quick
 #: benches on a 2-core Zen 4 VM (2026-12-07; benchmarks/README.md, "How well the progress
-#: bar foresees the time left"): the Panda's with its compiled law and the delicate
-#: table's from the idle one; the deep-RL baselines' from the ``-v2`` paper run's
+#: bar foresees the time left"): the Panda's with its compiled law from the idle one, the
+#: delicate table's as 1.01 times the robustness episodes' step, their ratio in an idle
+#: fresh clone with free flight holding the pins (2026-12-07, ``239cf6c``; 3.18 and 3.14
+#: ms there); the deep-RL baselines' from the ``-v2`` paper run's
 #: trainings (PPO 280 s and SAC 1,440 s for 288,000 env steps, two side by side).
 STEP_SECONDS = {
     "demo-rollout": 0.65e-3,  # a demonstration episode's step
     "eval-rollout": 0.4e-3,  # an evaluation episode's step
     "robust-rollout": 1.95e-3,  # a robustness episode's (finer grades step finer)
-    "delicate-rollout": 2.25e-3,  # ... with pins that bend
+    "delicate-rollout": 1.97e-3,  # ... with pins that bend
     "panda-rollout": 4.5e-3,  # a step of the Panda's table (its law compiled)
     "rs-gail-safe": 0.6e-3,  # π_n imitating the safe expert
     "rs-gail-efficient": 2.1e-3,  # ... the efficient one: its failing candidates in contact

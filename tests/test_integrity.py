@@ -23,7 +23,9 @@ from tolins.paper import A_MAX, CONTROL_DT
 from tolins.physics.mujoco import MujocoBackend
 
 BACKENDS = ["mujoco", "kinematic"]
-SEEDS = range(10000, 10020)
+#: A handful is enough: held for a whole episode, each corner of the action box drives the
+#: workpiece to the same corner of the servo range from any start, 7 mm from the holes.
+SEEDS = range(10000, 10005)
 #: Every corner of the action box.
 CORNERS = [np.array(c) * A_MAX for c in itertools.product((-1.0, 1.0), repeat=4)]
 DIVE = np.array([2.5, 0.0, 0.0, -2.5])
@@ -59,14 +61,14 @@ def _dmc_returns(domain: str, action: np.ndarray, seeds=SEEDS) -> list:
 @pytest.mark.parametrize("task", TASKS, ids=lambda t: t.name)
 def test_the_off_board_dive_scores_nothing(task, backend: str) -> None:
     """The reported hack: full speed sideways and down flew off the board and 'succeeded'."""
-    results = _gym_returns(task.gym_id, backend, DIVE, seeds=range(10000, 10005))
+    results = _gym_returns(task.gym_id, backend, DIVE)
     assert not any(success for _, success in results)
     assert max(total for total, _ in results) <= 0.0
 
 
 def test_the_off_board_dive_scores_nothing_in_dm_control() -> None:
     for domain in ("circle2x2", "square", "circle2x1_defective"):
-        results = _dmc_returns(domain, DIVE, seeds=range(10000, 10005))
+        results = _dmc_returns(domain, DIVE)
         assert not any(success for _, success in results)
         assert max(total for total, _ in results) <= 0.0
 
@@ -75,7 +77,7 @@ def test_the_off_board_dive_scores_nothing_in_dm_control() -> None:
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", ["tolins/Circle2x2-v2", "tolins/Square-v2"])
 def test_no_blind_open_loop_action_scores(env_id: str, backend: str) -> None:
-    """Every corner of the action box held for a whole episode, 20 seeds: no success, reward ≤ 0.
+    """Every corner of the action box held for a whole episode, 5 seeds: no success, reward ≤ 0.
     (The scoring is the task rules', the same for every physics version.)"""
     with ThreadPoolExecutor(2) as pool:
         results = list(pool.map(lambda a: _gym_returns(env_id, backend, a), CORNERS))
@@ -89,7 +91,7 @@ def test_no_blind_open_loop_action_scores_in_dm_control() -> None:
     """The corners in dm_control's task (the gym env's rules, tests/test_dmc.py replays its
     episodes): five seeds each."""
     with ThreadPoolExecutor(2) as pool:
-        results = list(pool.map(lambda a: _dmc_returns("circle2x2", a, SEEDS[:5]), CORNERS))
+        results = list(pool.map(lambda a: _dmc_returns("circle2x2", a), CORNERS))
     for corner, episodes in zip(CORNERS, results, strict=True):
         assert not any(s for _, s in episodes), corner
         assert max(total for total, _ in episodes) <= 0.0, corner

@@ -223,7 +223,7 @@ def test_contact_bearings_save_attempts() -> None:
     """On the same workpieces, each level of evidence inserts in fewer attempts."""
     methods = ("inference", "inference_blocked", "inference_contact")
     result = run_study(
-        StudyConfig(samples=40, seed=2, particles=300, workers=2, methods=methods, kinds=("bent",))
+        StudyConfig(samples=40, seed=2, particles=300, workers=1, methods=methods, kinds=("bent",))
     )
     attempts = {m: result.attempts[m] for m in methods}
     both = (attempts["inference_contact"] > 0) & (attempts["inference_blocked"] > 0)

@@ -9,6 +9,7 @@ that comes back is not compiled again: that of the owner's own socket always, an
 
 from __future__ import annotations
 
+import copy
 import functools
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
@@ -45,6 +46,12 @@ def model_builder(
     return functools.partial(
         compile_model, physics_version=physics_version_of(physics_version), pins=pins
     )
+
+
+def simulation_model(model: mujoco.MjModel, elastic: bool) -> mujoco.MjModel:
+    """``model`` for one simulation of a batch: with elastic-plastic pins a copy (its
+    ``eq_data`` holds that simulation's plastic set), else the shared model itself."""
+    return copy.copy(model) if elastic else model
 
 
 class SocketCache(Generic[T]):

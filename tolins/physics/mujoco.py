@@ -32,7 +32,7 @@ from tolins.geometry.delicate import ElasticPins
 from tolins.geometry.specs import SocketSpec
 from tolins.geometry.validation import check_int
 from tolins.mjcf import FORCE_SCALE
-from tolins.physics.compiled import SocketCache, model_builder
+from tolins.physics.compiled import SocketCache, model_builder, simulation_model
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import control_plan
@@ -219,20 +219,15 @@ class MujocoBatch(Capabilities):
         if socket is self._sockets[index]:
             return
         self._sockets[index] = socket
-        self._models[index] = self._own(self._compiled.get(socket))
+        self._models[index] = simulation_model(self._compiled.get(socket), self.elastic)
         self._models_changed = True
-
-    def _own(self, model: mujoco.MjModel) -> mujoco.MjModel:
-        """``model`` for one simulation: with elastic-plastic pins a copy (its ``eq_data``
-        holds that simulation's plastic set), else the shared model itself."""
-        return copy.copy(model) if self.elastic else model
 
     def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
         """Run simulation ``index`` on its workpiece's model with a randomised-physics
         ``draw`` applied (a copy of its own; ``None``: the workpiece's model)."""
         base = self._compiled.get(self._sockets[index])
         if draw is None or not draw.changes_model:
-            self._models[index] = self._own(base)
+            self._models[index] = simulation_model(base, self.elastic)
         else:
             model = copy.copy(base)
             apply_draw(model, nominal_fields(base), draw)

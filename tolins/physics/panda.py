@@ -64,10 +64,10 @@ from tolins.physics.arm import (
     place_grasp,
     wrist_wrench,
 )
-from tolins.physics.compiled import SocketCache
+from tolins.physics.compiled import SocketCache, simulation_model
 from tolins.physics.law_state import STATE, STATE_SIZE, advance_target
 from tolins.physics.mujoco import check_threads, default_threads
-from tolins.physics.plasticity import PinPlasticity
+from tolins.physics.plasticity import PinPlasticity, pin_states
 from tolins.physics.protocol import BackendState, BatchState, Capabilities
 from tolins.physics.randomization import PhysicsDraw, apply_draw, nominal_fields
 from tolins.physics.schedule import contact_chunks, control_plan
@@ -310,11 +310,9 @@ class PandaSimulations:
         if self._pins is None:
             return None
         pins = self.plasticity[i]
-        if pins is None or pins.model is not self.models[i]:
-            made = PinPlasticity(self.models[i], self._pins)
-            if pins is not None:
-                made.assign(pins.plastic)
-            pins = self.plasticity[i] = made
+        model = self.models[i]
+        pins = PinPlasticity(model, self._pins) if pins is None else pins.on(model)
+        self.plasticity[i] = pins
         return pins
 
     def step(self, ids: np.ndarray, velocities: np.ndarray) -> BatchState:
@@ -452,12 +450,11 @@ class PandaSimulations:
         state = BatchState(pose, wrench, peak_force, errors, sensed_pose, sensed_wrench)
         if self._pins is None:
             return state
-        pins = [self._plasticity(i) for i in ids.tolist()]
-        n_pins = len(self._pins.length)
-        bends = np.array([p.bend() for p in pins]).reshape(n, n_pins, 2)
-        deflections = np.array(
-            [p.deflection(self.datas[i].qpos) for p, i in zip(pins, ids.tolist(), strict=True)]
-        ).reshape(n, n_pins, 2)
+        bends, deflections = pin_states(
+            [self._plasticity(i) for i in ids.tolist()],
+            [self.datas[i].qpos for i in ids.tolist()],
+            len(self._pins.length),
+        )
         return dataclasses.replace(state, pin_bend=bends, pin_deflection=deflections)
 
 
@@ -514,7 +511,7 @@ class PandaBatch(Capabilities):
         self.model = build(socket)
         self._compiled = SocketCache(build, socket, 2 * self.num_envs, own=self.model)
         self._sockets = [socket] * self.num_envs
-        models = [self._own(self.model) for _ in range(self.num_envs)]
+        models = [simulation_model(self.model, self.elastic) for _ in range(self.num_envs)]
         datas = [mujoco.MjData(self.model) for _ in range(self.num_envs)]
         self.arm = Arm(self.model, gains or default_gains(self.version))
         self.sims = PandaSimulations(
@@ -525,15 +522,10 @@ class PandaBatch(Capabilities):
     def set_socket(self, index: int, socket: SocketSpec) -> None:
         if socket is self._sockets[index]:
             return
-        model = self._own(self._compiled.get(socket))
+        model = simulation_model(self._compiled.get(socket), self.elastic)
         self._sockets[index] = socket
         self.sims.models[index] = model
         self.sims.datas[index] = mujoco.MjData(model)
-
-    def _own(self, model: mujoco.MjModel) -> mujoco.MjModel:
-        """``model`` for one simulation: with elastic-plastic pins a copy (its ``eq_data``
-        holds that simulation's plastic set), else the shared model itself."""
-        return copy.copy(model) if self.elastic else model
 
     def set_physics(self, index: int, draw: PhysicsDraw | None) -> None:
         """Run simulation ``index`` with a randomised-physics ``draw`` (``None``: nominal):
@@ -543,7 +535,8 @@ class PandaBatch(Capabilities):
         base = self._compiled.get(self._sockets[index])
         sims = self.sims
         if draw is None or not draw.changes_model:
-            sims.models[index], sims.gains[index] = self._own(base), self.arm.gains
+            sims.models[index] = simulation_model(base, self.elastic)
+            sims.gains[index] = self.arm.gains
             return
         contact, sims.gains[index] = split_draw(draw, self.arm.gains)
         model = copy.copy(base)

@@ -120,7 +120,7 @@ class PinPlasticity:
     """
 
     def __init__(self, model: mujoco.MjModel, pins: ElasticPinLayout) -> None:
-        self.model = model
+        self.model, self.layout = model, pins
         self.hinges = pins.hinges
         joints = np.searchsorted(model.jnt_qposadr, self.hinges)
         self.dofs = model.jnt_dofadr[joints].astype(np.intp)
@@ -132,6 +132,15 @@ class PinPlasticity:
         self.reach = np.hypot(roots[:, 0], roots[:, 1]) + self.lengths
         self.plastic = np.zeros((len(self.hinges), 2))
         kernels()  # numba imported now, not in the first step
+
+    def on(self, model: mujoco.MjModel) -> PinPlasticity:
+        """These pins on ``model`` (itself if it is theirs, else a new one with their
+        plastic set): a simulation whose model changed keeps its part's bends."""
+        if model is self.model:
+            return self
+        moved = PinPlasticity(model, self.layout)
+        moved.assign(self.plastic)
+        return moved
 
     def assign(self, plastic: np.ndarray | None = None) -> None:
         """Set the plastic set ``(n_pins, 2)`` (rad; ``None``: straight pins)."""
@@ -187,3 +196,15 @@ class PinPlasticity:
         """Each pin's tip offset at ``qpos`` ``(n_pins, 2)`` (mm, workpiece frame), elastic
         included."""
         return tip_offsets(qpos[self.hinges], self.lengths)
+
+
+def pin_states(
+    plasticity: list[PinPlasticity], qpos: list[np.ndarray], n_pins: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each simulation's pins' permanent tip offsets and their tip offsets now, elastic
+    included, ``(n, n_pins, 2)`` each (mm, workpiece frame), from its ``plasticity`` and
+    ``qpos``."""
+    n = len(plasticity)
+    bends = np.array([p.bend() for p in plasticity]).reshape(n, n_pins, 2)
+    deflections = [p.deflection(q) for p, q in zip(plasticity, qpos, strict=True)]
+    return bends, np.array(deflections).reshape(n, n_pins, 2)

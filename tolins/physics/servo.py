@@ -35,7 +35,7 @@ from tolins.physics.free_flight import (
     free_steps,
     servo_limits,
 )
-from tolins.physics.plasticity import PinPlasticity
+from tolins.physics.plasticity import PinPlasticity, pin_states
 from tolins.physics.protocol import BackendState, BatchState
 from tolins.physics.schedule import CONTACT_CHECKS, contact_chunks
 
@@ -566,15 +566,11 @@ class BatchServo:
         if self.elastic:
             if len({id(model) for model in models}) != len(models):
                 raise ValueError("elastic-plastic pins need a model of its own per simulation")
-            old, plasticity = self.models, []
-            for i, model in enumerate(models):
-                if i < len(old) and old[i] is model:
-                    plasticity.append(self.plasticity[i])
-                    continue
-                plasticity.append(PinPlasticity(model, self.layout.elastic))
-                if i < len(old):
-                    plasticity[-1].assign(self.plasticity[i].plastic)
-            self.plasticity = plasticity
+            old = self.plasticity
+            self.plasticity = [
+                old[i].on(model) if i < len(old) else PinPlasticity(model, self.layout.elastic)
+                for i, model in enumerate(models)
+            ]
         self.models = models
         self.batch.set_models(models)
         if self.free_flight:
@@ -626,9 +622,7 @@ class BatchServo:
         if not self.elastic:
             return state
         rows = [self.plasticity[i] for i in ids.tolist()]
-        bends = np.array([p.bend() for p in rows]).reshape(len(ids), layout.n_pins, 2)
-        deflections = np.array([p.deflection(q) for p, q in zip(rows, qpos, strict=True)])
-        deflections = deflections.reshape(len(ids), layout.n_pins, 2)
+        bends, deflections = pin_states(rows, list(qpos), layout.n_pins)
         return dataclasses.replace(state, pin_bend=bends, pin_deflection=deflections)
 
     def step(self, ids: np.ndarray, nstep: int, checks: int) -> tuple[np.ndarray, tuple]:

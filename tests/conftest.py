@@ -46,6 +46,14 @@ class TinyBench:
                 shutil.copytree(folder, stages / folder.name)
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _sb3_logs_in_pytest_tmp(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """SB3's default logger makes an empty folder per training in the system's temporary
+    directory, ``$SB3_LOGDIR`` if set: the suite's go under pytest's own (its processes
+    inherit it)."""
+    os.environ["SB3_LOGDIR"] = str(tmp_path_factory.mktemp("sb3_logs"))
+
+
 @pytest.fixture(scope="session")
 def tiny_bench(tmp_path_factory: pytest.TempPathFactory) -> TinyBench:
     """:class:`TinyBench`, made by the first test (of any pytest-xdist worker) that asks for

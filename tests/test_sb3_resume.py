@@ -126,13 +126,17 @@ def _kill(stage, root: Path, number: int, at: int) -> int:
 
 
 def _train_slowly(root: str, stage) -> None:
-    """``train_job``, each env step after the first point of the curve 5 ms longer (so
-    that the stop the test makes arrives mid-training)."""
+    """``train_job`` that, after the first point of the curve, waits (up to a minute) for
+    the stop the test makes, so that it arrives mid-training however loaded the machine."""
     step = sb3._Checkpoints._on_step
 
     def on_step(self) -> bool:
         if self.run.model.num_timesteps > BUDGET["curve_every"]:
-            time.sleep(0.005)
+            deadline = time.monotonic() + 60.0
+            while self.signals.pending is None and not stop_requested():
+                if time.monotonic() > deadline:
+                    break
+                time.sleep(0.01)
         return step(self)
 
     sb3._Checkpoints._on_step = on_step

@@ -264,7 +264,7 @@ def check_capabilities(settings: TaskSettings, backend: str, *, single: bool = F
     cls = chosen.single if single else chosen.batch
     on = simulator_place(backend, settings.robot)
     if settings.elastic is not None:
-        check_elastic_pins(cls, on if single else f"{on} in the vector env")
+        check_elastic_pins(cls, simulator_place(backend, settings.robot, vector=not single))
     if settings.randomization is not None and not cls.supports_randomization:
         raise ValueError(f"randomization is not supported on {on}")
     kind = None if settings.defects is None else settings.defects[0]

@@ -141,10 +141,11 @@ def make_backend(
     return chosen.single(spec, control_dt, physics_version=physics_version, pins=pins)
 
 
-def simulator_place(name: str, robot: str) -> str:
+def simulator_place(name: str, robot: str, vector: bool = False) -> str:
     """The simulator ``name`` with ``robot`` as an error names it, e.g. ``backend='mujoco',
-    robot='panda'`` (the free body unnamed)."""
-    return f"backend={name!r}" + ("" if robot == "free" else f", robot={robot!r}")
+    robot='panda'`` (the free body unnamed), ``in the vector env`` added for its batch."""
+    robot_part = "" if robot == "free" else f", robot={robot!r}"
+    return f"backend={name!r}{robot_part}" + (" in the vector env" if vector else "")
 
 
 def make_batch(
@@ -174,6 +175,6 @@ def make_batch(
     given = {"num_threads": num_threads, "device": device, "persistent": persistent}
     options = {k: v for k, v in given.items() if k in cls.batch_options and v is not None}
     if pins is not None:
-        check_elastic_pins(cls, f"{simulator_place(name, robot)} in the vector env")
+        check_elastic_pins(cls, simulator_place(name, robot, vector=True))
         options["pins"] = pins
     return cls(socket, num_envs, control_dt, physics_version=physics_version, **options)

@@ -249,8 +249,7 @@ def format_markdown(
             "",
             "## Recordings",
             "",
-            "`recordings/{ID}.rrd`: evaluation episodes of each row; "
-            "`tolins replay recordings/C2.3.rrd` (figures: run again without `--no-figures`).",
+            f"{_RECORDINGS} (figures: run again without `--no-figures`).",
             "",
         ]
         return "\n".join(parts)
@@ -266,11 +265,16 @@ def format_markdown(
         "- `tolerance_images.png`: the tolerance images of the workpieces.",
         "- `force_profiles/{ID}.png`: each row's normal force against insertion depth over "
         "its evaluation episodes (training seed 0), successes and failures coloured.",
-        "- `recordings/{ID}.rrd`: evaluation episodes of each row; "
-        "`tolins replay recordings/C2.3.rrd`.",
+        f"- {_RECORDINGS}.",
         "",
     ]
     return "\n".join(parts)
+
+
+#: What results.md says of the run's recordings.
+_RECORDINGS = (
+    "`recordings/{ID}.rrd`: evaluation episodes of each row; `tolins replay recordings/C2.3.rrd`"
+)
 
 
 def _force_section(results: dict[str, dict[str, Any]]) -> list[str]:

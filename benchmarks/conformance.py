@@ -6,8 +6,10 @@ Usage::
 
     python benchmarks/conformance.py [--steps 10] [--tasks robot|delicate]
 
-For each registered id of the tasks (``robot``: every paper workpiece and 50 µm grade with
-the Panda, ``-v2`` and ``-v3``; ``delicate``: the round-pin workpieces with pins that bend):
+For each registered id of the tasks of a tag (``robot``: every paper workpiece and 50 µm
+grade with the Panda, ``-v2`` and ``-v3``, and the delicate ones with the Panda;
+``delicate``: the round-pin workpieces with pins that bend, with the free body and the
+Panda):
 ``check_env`` on the unwrapped env; two envs from the same seed give the same
 observations bit for bit over ``--steps`` steps of fixed actions; a vector env of three
 simulations on 1 thread and on 2 threads gives, per simulation, the single env's
@@ -26,7 +28,7 @@ import numpy as np
 from gymnasium.utils.env_checker import check_env
 
 import tolins
-from tolins.envs.tasks import DELICATE_TASKS, ROBOT_TASKS
+from tolins.envs.tasks import GYM_TASKS
 
 ACTIONS = np.array([[1.0, 0.0, 0.05, -2.5], [-1.0, 2.0, 0.0, -1.0], [0.0, 0.0, 0.0, -2.5]])
 QUIET = {"measurement_noise": 0.0}
@@ -66,7 +68,7 @@ def main() -> int:
     parser.add_argument("--tasks", choices=("robot", "delicate"), default="robot")
     args = parser.parse_args()
     warnings.simplefilter("ignore")  # gymnasium's advice on Box bounds and older versions
-    tasks = ROBOT_TASKS if args.tasks == "robot" else DELICATE_TASKS
+    tasks = [task for task in GYM_TASKS if args.tasks in task.tags]
     ids = [task.gym_id_of(v) for task in tasks for v in task.physics_versions]
     print("| id | check_env | deterministic | vector, 1 thread | vector, 2 threads | s |")
     print("|---|---|---|---|---|--:|")

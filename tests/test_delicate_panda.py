@@ -11,6 +11,7 @@ from gymnasium.utils.env_checker import check_env
 
 import tolins
 from tolins import dmc
+from tolins.envs.tasks import DELICATE_ROBOT_TASKS
 
 #: Alloy 42's pins yield under the arm's push (2.5 N a pin against 1.46 N).
 DELICATE = {"pins": "elastic-plastic", "pin_material": "alloy42", "measurement_noise": 0.0}
@@ -88,3 +89,19 @@ def test_dm_control_steps_the_panda_as_the_gym_id() -> None:
         assert np.array_equal(state.pin_bend, info["pin_bend"])
         assert np.array_equal(state.pin_deflection, info["pin_deflection"])
     assert np.abs(info["pin_bend"]).max() > 0.1
+
+
+def test_the_registered_ids_are_the_panda_with_delicate_pins(dragged) -> None:
+    _, info = dragged
+    registered = gym.make(
+        "tolins/Circle2x1DelicatePanda-v3", pin_material="alloy42", measurement_noise=0.0
+    ).unwrapped
+    assert registered.settings.robot == "panda" and registered.settings.pins == "elastic-plastic"
+    registered.reset(seed=0, options={"pose": IN_HOLES})
+    *_, again = registered.step(SIDEWAYS)
+    assert np.array_equal(again["pin_bend"], info["pin_bend"])
+    assert np.array_equal(again["pose"], info["pose"])
+    ids = [task.gym_id_of(3) for task in DELICATE_ROBOT_TASKS]
+    assert ids[1] == "tolins/Circle2x2DelicatePanda-v3" and all(i in gym.registry for i in ids)
+    assert all({"robot", "delicate"} <= set(task.tags) for task in DELICATE_ROBOT_TASKS)
+    assert ("circle2x8_fit50_delicate_panda", "insert") in dmc.DELICATE

@@ -14,7 +14,13 @@ from dm_env import StepType, test_utils
 import tolins
 from tolins import dmc
 from tolins.envs import TASKS, InsertionEnv
-from tolins.envs.tasks import DELICATE_TASKS, GRADE_TASKS, PRESETS, ROBOT_TASKS
+from tolins.envs.tasks import (
+    DELICATE_ROBOT_TASKS,
+    DELICATE_TASKS,
+    GRADE_TASKS,
+    PRESETS,
+    ROBOT_TASKS,
+)
 from tolins.paper import A_MAX, HORIZON, SUCCESS_REWARD
 from tolins.physics.servo import ServoStepper
 
@@ -57,10 +63,12 @@ del _case, _domain, _task
 
 
 def test_suite_is_built_from_the_task_table() -> None:
-    everything = PRESETS + ROBOT_TASKS + DELICATE_TASKS
+    everything = PRESETS + ROBOT_TASKS + DELICATE_TASKS + DELICATE_ROBOT_TASKS
     assert tuple((task.domain, "insert") for task in everything) == dmc.ALL_TASKS
-    assert tuple((task.domain, "insert") for task in ROBOT_TASKS) == dmc.ROBOT
-    assert tuple((task.domain, "insert") for task in DELICATE_TASKS) == dmc.DELICATE
+    robot = ROBOT_TASKS + DELICATE_ROBOT_TASKS
+    assert tuple((task.domain, "insert") for task in robot) == dmc.ROBOT
+    delicate = DELICATE_TASKS + DELICATE_ROBOT_TASKS
+    assert tuple((task.domain, "insert") for task in delicate) == dmc.DELICATE
     assert set(PANDA_CONFORMANCE) <= {domain for domain, _ in dmc.ROBOT}
     assert [domain for domain, _ in dmc.PAPER] == [
         "circle2x1",

@@ -1,7 +1,7 @@
 """The Ray executor (``tolins bench --executor ray``) and RS-GAIL on Ray actors: results
-identical to the local executor's, on a local Ray instance and on a two-node cluster that
-the test starts on 127.0.0.1 (and stops: it ends the two ``ray start --block`` processes
-it started, which take their raylets, GCS and workers with them)."""
+identical to the local executor's, RS-GAIL's on a local Ray instance, the bench's on a
+two-node cluster that the test starts on 127.0.0.1 (and stops: it ends the two ``ray start
+--block`` processes it started, which take their raylets, GCS and workers with them)."""
 
 from __future__ import annotations
 
@@ -137,20 +137,6 @@ def test_rs_gail_on_ray_actors_searches_exactly_as_on_threads(local_ray, tmp_pat
     pools["ray"].shutdown()
 
 
-@pytest.mark.slow
-def test_ray_executor_gives_the_local_executors_results(local_ray, local_outputs, tmp_path):
-    run = run_bench(_bench(tmp_path, executor="ray"), progress=False, log=lambda _: None)
-    assert _outputs(tmp_path) == local_outputs
-    stages = json.loads((tmp_path / "run.json").read_text())["stages"]
-    assert set(stages) == set(run.stage_times)
-    # 2 demonstration datasets (2*2, 2*8), 3 trainings (bc_safe, pi_n_safe, pi_phi_circle),
-    # 3 evaluations, the study, 5 robustness stages (tolins.bench.jobs.robustness), π_n's
-    # trajectories
-    assert len(stages) == 15
-    assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
-    assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
-
-
 def _free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -220,7 +206,6 @@ def test_a_two_node_cluster_gives_the_local_executors_results(two_nodes, local_o
         ROWS,
     ]
     command += ["--backend", "kinematic", "--out", str(tmp_path), "--executor", "ray"]
-    command += ["--no-figures"]  # the timeline of a Ray run: the test above
     done = subprocess.run(
         [*command, "--address", two_nodes],
         env={**os.environ, **RAY_ENV},
@@ -231,7 +216,13 @@ def test_a_two_node_cluster_gives_the_local_executors_results(two_nodes, local_o
     assert done.returncode == 0, done.stderr[-3000:]
     assert _outputs(tmp_path) == local_outputs
     stages = json.loads((tmp_path / "run.json").read_text())["stages"]
+    # 2 demonstration datasets (2*2, 2*8), 3 trainings (bc_safe, pi_n_safe, pi_phi_circle),
+    # 3 evaluations, the study, 5 robustness stages (tolins.bench.jobs.robustness), π_n's
+    # trajectories
+    assert len(stages) == 15
+    assert all(s["node"] and s["finished"] >= s["started"] for s in stages.values())
     assert len({s["node"] for s in stages.values()}) == 2  # both nodes ran stages
+    assert (tmp_path / "timeline.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def _bench_cli(tmp_path, *options: str) -> list[str]:

@@ -166,7 +166,9 @@ def require_robot_for(env_id: str, option: str | None = None) -> None:
     task's id."""
     from tolins.envs import tasks
 
-    robot = {t.gym_id_of(v) for t in tasks.ROBOT_TASKS for v in t.physics_versions}
+    robot = {
+        t.gym_id_of(v) for t in tasks.GYM_TASKS if t.robot != "free" for v in t.physics_versions
+    }
     if env_id in robot:
         require_robot(env_id if option is None else f"{option} {env_id}")
 

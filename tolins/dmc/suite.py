@@ -10,7 +10,7 @@ from dm_control.utils import containers
 from tolins.dmc.physics import InsertionPhysics
 from tolins.dmc.task import Insert
 from tolins.envs.task_settings import keywords_of
-from tolins.envs.tasks import DELICATE_TASKS, PRESETS, ROBOT_TASKS, Task
+from tolins.envs.tasks import GYM_TASKS, Task
 from tolins.paper import CONTROL_DT
 
 TASK_NAME = "insert"
@@ -65,12 +65,11 @@ def _domain_suite(task: Task) -> containers.TaggedTasks:
     return suite
 
 
-#: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``):
-#: the presets', then the robot tasks' (``circle2x2_panda``, …, on the robot's newest
-#: physics, ``-v3``).
-SUITES: dict[str, containers.TaggedTasks] = {
-    t.domain: _domain_suite(t) for t in PRESETS + ROBOT_TASKS + DELICATE_TASKS
-}
+#: Domain name -> its ``TaggedTasks`` (as the modules of ``dm_control.suite`` have ``SUITE``),
+#: one per task with gymnasium ids: the presets', then the robot tasks' (``circle2x2_panda``,
+#: …, on the robot's newest physics, ``-v3``), the delicate ones' (``circle2x2_delicate``)
+#: and the delicate ones held by the robot (``circle2x2_delicate_panda``).
+SUITES: dict[str, containers.TaggedTasks] = {t.domain: _domain_suite(t) for t in GYM_TASKS}
 
 
 def get_tasks(tag: str | None = None) -> tuple[tuple[str, str], ...]:

@@ -195,7 +195,8 @@ class InsertionEnv(gym.Env, SettingsAttributes):
       bent, ``pin_material``, ``damage_threshold``, ``damage_penalty``, ``keep_part``;
       ``info["pin_bend"]``, ``info["pin_deflection"]``, ``info["damaged"]``) and its ids
       ``tolins/{name}Delicate-v2`` (docs/delicate.md), with the free body or the Panda
-      holding the part; rigid pins, the default, unchanged bit for bit.
+      holding the part (the Panda's ids ``tolins/{name}DelicatePanda-v3``); rigid pins,
+      the default, unchanged bit for bit.
     * v2 and v3, after tolins 0.6.0: the Panda's law compiled (numba, the numpy law the
       fallback): the same law within rounding, its torques within 1e-9 of numpy's; the
       last bits of every Panda episode change, and 3 of 1,600 expert episodes end

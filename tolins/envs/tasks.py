@@ -139,10 +139,10 @@ GRADE_TASKS: tuple[Task, ...] = tuple(
 PRESETS: tuple[Task, ...] = TASKS + GRADE_TASKS
 
 
-def _on_panda(task: Task) -> Task:
-    """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), on
-    physics version 2 and the Panda's newest, tagged ``robot`` (not ``paper`` or ``grade``:
-    those suites stay the free body's)."""
+def _on_panda(task: Task, versions: tuple[int, ...] = (2, LATEST)) -> Task:
+    """``task`` with a Franka Panda holding the part (:mod:`tolins.physics.panda`), its pins
+    as ``task``'s, on the physics ``versions`` (default: 2 and the Panda's newest), tagged
+    ``robot`` (not ``paper`` or ``grade``: those suites stay the free body's)."""
     return Task(
         name=f"{task.name}Panda",
         domain=f"{task.domain}_panda",
@@ -150,7 +150,8 @@ def _on_panda(task: Task) -> Task:
         tags=("robot", *(t for t in task.tags if t not in ("paper", "grade"))),
         defect_sigma=task.defect_sigma,
         robot="panda",
-        versions=(2, LATEST),
+        versions=versions,
+        pins=task.pins,
     )
 
 
@@ -184,8 +185,13 @@ DELICATE_TASKS: tuple[Task, ...] = tuple(
     and task.defect_sigma is None
     and (task in TASKS or "fit50" in task.tags)
 )
-#: Every task that has gymnasium ids.
-GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS + DELICATE_TASKS
+#: The delicate workpieces held by a Franka Panda, on its newest physics: gymnasium ids
+#: ``tolins/{name}DelicatePanda-v3``, tagged ``robot`` and ``delicate``.
+DELICATE_ROBOT_TASKS: tuple[Task, ...] = tuple(
+    _on_panda(task, versions=(LATEST,)) for task in DELICATE_TASKS
+)
+#: Every task that has gymnasium ids (and a dm_control domain), in the order of their ids.
+GYM_TASKS: tuple[Task, ...] = PRESETS + ROBOT_TASKS + DELICATE_TASKS + DELICATE_ROBOT_TASKS
 #: The generic ids by physics version; pass ``socket=`` (and any other keyword) to
 #: ``gymnasium.make``.
 GENERIC_IDS = {version: f"tolins/Insert-v{version}" for version in versions_of("free")}

@@ -40,6 +40,8 @@ class Profile:
         rl_curve_points: Points of each baseline's learning curve.
         robustness_episodes: Episodes per cell of the robustness table (policy ×
             condition, :mod:`tolins.bench.table.robustness`) and training seed.
+        study_particles: Posterior samples per goal query of the inference study;
+            ``None``: the study's own default (``StudyConfig.particles``).
     """
 
     name: str
@@ -59,6 +61,7 @@ class Profile:
     rl_env_steps: int | None = None
     rl_curve_points: int = 20
     robustness_episodes: int = 6
+    study_particles: int | None = None
 
     @property
     def iteration_episodes(self) -> int:
@@ -174,5 +177,6 @@ PROFILES: dict[str, Profile] = {
         rl_env_steps=200,
         rl_curve_points=1,
         robustness_episodes=1,
+        study_particles=200,
     ),
 }

@@ -84,12 +84,13 @@ def study_settings(profile: Profile, backend: str, workers: int = 2) -> StudyCon
     """The inference study of ``profile`` on ``backend`` (MuJoCo contact outcomes on
     mujoco, the tolerance model's on kinematic), on ``workers`` processes: its workpieces,
     and besides the bent ones pitch, burr and blocked workpieces (12 each, at most the
-    profile's workpieces)."""
+    profile's workpieces), with the profile's posterior samples per goal query."""
     from tolins.inference.study import StudyConfig
 
     return StudyConfig(
         samples=profile.study_samples,
         seed=0,
+        particles=profile.study_particles or StudyConfig.particles,
         workers=workers,
         physics=backend == "mujoco",
         kind_samples=min(StudyConfig.kind_samples, profile.study_samples),

@@ -48,8 +48,14 @@ def _conformance_case(domain: str, task: str) -> type:
 
 
 #: The Panda's domains tested for conformance (each compiles the arm's world, ~0.5 s): one
-#: circle, the defective one (its physics rebuilt per episode) and a polygon.
-PANDA_CONFORMANCE = ("circle2x2_panda", "circle2x1_defective_panda", "square_panda")
+#: circle, the defective one (its physics rebuilt per episode), a polygon, and one with
+#: delicate pins.
+PANDA_CONFORMANCE = (
+    "circle2x2_panda",
+    "circle2x1_defective_panda",
+    "square_panda",
+    "circle2x1_delicate_panda",
+)
 #: The delicate domains tested for conformance: one stands for them (same stepper).
 DELICATE_CONFORMANCE = ("circle2x2_delicate",)
 for _domain, _task in dmc.ALL_TASKS:

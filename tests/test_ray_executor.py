@@ -309,11 +309,13 @@ def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray)
     # Library functions: Ray imports them by name on its workers.
     jobs = [Stage("slow", time.sleep, (2.5,)), Stage("after", print, ("after",), deps=("slow",))]
     started, finished = {}, {}
-    RayExecutor().run(
+    executor = RayExecutor()
+    executor.run(
         jobs,
         on_start=lambda job: started.setdefault(job.name, time.monotonic()),
         on_done=lambda job, _: finished.setdefault(job.name, time.monotonic()),
     )
+    executor.close()
     assert set(started) == set(finished) == {"slow", "after"}
     # "after" cannot begin before "slow" ends; the executor reads the starts once a second
     assert started["after"] - started["slow"] > 1.0
@@ -322,19 +324,23 @@ def test_a_task_is_reported_started_when_it_begins_not_when_submitted(local_ray)
 
 def test_tasks_start_as_cpus_free_up_the_costliest_chain_first(local_ray):
     executor = RayExecutor()
-    executor.run([Stage(name, time.sleep, (0.5,)) for name in ("a", "b")])  # both workers up
+    warm_up = [Stage(name, time.sleep, (0.5,)) for name in ("a", "b")]
+    executor.run(warm_up, on_start=lambda _: None)  # both workers and the start queue up
     jobs = [Stage(name, time.sleep, (3.0,)) for name in ("x", "y", "big")]
     order = []
     executor.run(jobs, on_start=lambda job: order.append(job.name), costs={"big": 10.0})
+    executor.close()
     # 2 CPUs: "big" and "x" first, "y" once one of them has ended (submitted all at once,
     # Ray would start "x" and "y")
     assert sorted(order[:2]) == ["big", "x"] and order[2] == "y"
 
 
 def test_a_failed_task_is_raised_naming_its_stage(local_ray):
+    executor = RayExecutor()
     with pytest.raises(ValueError, match="math domain error") as raised:
-        RayExecutor().run([Stage("bad", math.sqrt, (-1.0,))], on_start=lambda _: None)
+        executor.run([Stage("bad", math.sqrt, (-1.0,))], on_start=lambda _: None)
     assert failed_stage(raised.value) == "bad"
+    executor.close()
 
 
 def test_an_address_while_ray_runs_in_this_process_is_refused(local_ray):

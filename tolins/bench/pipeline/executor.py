@@ -309,6 +309,7 @@ class RayExecutor:
         self.torch_threads = torch.get_num_threads()
         self.placement: dict[str, dict[str, Any]] = {}
         self._pool = None
+        self._started = None
 
     @property
     def workers(self) -> int:
@@ -336,10 +337,10 @@ class RayExecutor:
         behind it first (:class:`Schedule`), so that Ray runs the jobs in that order.
 
         ``on_start`` is called when a task begins on its worker (each task puts its name on
-        a :class:`ray.util.queue.Queue` first, which this loop reads once a second)."""
+        a :class:`ray.util.queue.Queue` first, which this loop reads every ``WAKE_S``)."""
         ray = self._ray
         task = ray.remote(num_cpus=1, num_returns=2)(_ray_task)
-        started = _start_queue() if on_start else None
+        started = self._start_queue() if on_start else None
         schedule = Schedule(jobs, costs or {})
         slots = self.workers
         by_name = {job.name: job for job in jobs}
@@ -374,15 +375,30 @@ class RayExecutor:
                         on_done(job, value)
                     schedule.finished(job.name)
         finally:
-            if started is not None:
-                started.shutdown()
+            if started is not None:  # what a failed run's tasks put there
+                started.get_nowait_batch(started.qsize())
         return {job.name: ray.get(values[job.name]) for job in jobs}
 
+    def _start_queue(self) -> Any:
+        """The queue Ray tasks put their names on as they start: an actor holding no CPU,
+        made by the first run that reports starts and kept until :meth:`close` (an actor
+        made anew for each run could take a worker that a task of that run then waits to
+        see started)."""
+        if self._started is None:
+            from ray.util.queue import Queue
+
+            self._started = Queue(actor_options={"num_cpus": 0})
+        return self._started
+
     def close(self) -> None:
-        """End the rollout actors; disconnect from (or stop) the Ray instance started here."""
+        """End the rollout actors and the start queue; disconnect from (or stop) the Ray
+        instance started here."""
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
+        if self._started is not None:
+            self._started.shutdown()
+            self._started = None
         if self._owned and self._ray.is_initialized():
             self._ray.shutdown()
 
@@ -481,13 +497,6 @@ def _where() -> dict[str, Any]:
         "pid": os.getpid(),
         "thread": threading.current_thread().name,
     }
-
-
-def _start_queue() -> Any:
-    """A queue on which Ray tasks put their names as they start (an actor holding no CPU)."""
-    from ray.util.queue import Queue
-
-    return Queue(actor_options={"num_cpus": 0})
 
 
 def _ray_task(

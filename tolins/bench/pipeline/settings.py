@@ -80,18 +80,27 @@ def robustness_spec(
     return RobustnessSpec(policy, seed, backend, seeds, policy_stage, table)
 
 
+#: Workpieces of the inference study per process it runs on: a smaller study runs on
+#: fewer processes (starting one, which imports tolins, costs as much as a few dozen
+#: workpieces of the tolerance model; the results do not depend on them).
+STUDY_WORKPIECES_PER_PROCESS = 100
+
+
 def study_settings(profile: Profile, backend: str, workers: int = 2) -> StudyConfig:
     """The inference study of ``profile`` on ``backend`` (MuJoCo contact outcomes on
-    mujoco, the tolerance model's on kinematic), on ``workers`` processes: its workpieces,
-    and besides the bent ones pitch, burr and blocked workpieces (12 each, at most the
-    profile's workpieces), with the profile's posterior samples per goal query."""
+    mujoco, the tolerance model's on kinematic), on at most ``workers`` processes (one per
+    :data:`STUDY_WORKPIECES_PER_PROCESS`): its workpieces, and besides the bent ones pitch,
+    burr and blocked workpieces (12 each, at most the profile's workpieces), with the
+    profile's posterior samples per goal query."""
     from tolins.inference.study import StudyConfig
 
+    kind_samples = min(StudyConfig.kind_samples, profile.study_samples)
+    workpieces = profile.study_samples + kind_samples * (len(StudyConfig.kinds) - 1)
     return StudyConfig(
         samples=profile.study_samples,
         seed=0,
         particles=profile.study_particles or StudyConfig.particles,
-        workers=workers,
+        workers=max(1, min(workers, workpieces // STUDY_WORKPIECES_PER_PROCESS)),
         physics=backend == "mujoco",
-        kind_samples=min(StudyConfig.kind_samples, profile.study_samples),
+        kind_samples=kind_samples,
     )

@@ -3,6 +3,7 @@ from the single-env loop and the vector-env runner, and in results.json (schema 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -99,6 +100,26 @@ def _episodes(peaks):
         Episode(1.0, True, 30, 0, None, ForceScores(p, p / 2, p / 4, i % 2, 7.5))
         for i, p in enumerate(peaks)
     ]
+
+
+def test_the_force_table_adds_the_damage_where_pins_could_bend():
+    from tolins.bench.table.force_table import format_force_table
+
+    rigid = row_entry(ROWS[0], [_episodes([1.0, 3.0])])
+    seeds = [
+        [
+            dataclasses.replace(e, damaged=d)
+            for e, d in zip(_episodes([1.0, 3.0]), bends, strict=True)
+        ]
+        for bends in ((True, False), (True, True))
+    ]
+    delicate = row_entry(ROWS[1], seeds)
+    header, _, *lines = format_force_table({"C1.1": rigid, "C1.2": delicate}).splitlines()
+    assert header.endswith("| cycle time (s) | damaged | success, undamaged |")
+    assert lines[0].startswith("| C1.1 |") and lines[0].endswith("| – | – |")
+    # per seed: damaged 0.5 and 1.0, undamaged successes 0.5 and 0.0 (std over seed means)
+    assert lines[1].endswith("| 0.75 ± 0.25 | 0.25 ± 0.25 |")
+    assert "damaged" not in format_force_table({"C1.1": rigid})
 
 
 def test_rows_carry_the_force_figures_per_seed_and_per_episode(tmp_path):

@@ -29,23 +29,35 @@ FORCE_NOTE = (
 )
 
 
+#: (figure, column heading) of the columns added where a row's pins could bend
+#: (docs/delicate.md; :func:`~tolins.bench.table.results.damage_figures`).
+DAMAGE_COLUMNS = (("damage", "damaged"), ("success_undamaged", "success, undamaged"))
+
+
 def has_forces(entry: dict[str, Any]) -> bool:
     """Whether ``entry`` carries every force figure."""
     return all(f"{name}_mean" in entry for name, _ in FORCE_COLUMNS)
 
 
 def format_force_table(rows: dict[str, dict[str, Any]]) -> str:
-    """The rows that carry force figures as a Markdown table (``""`` when none does)."""
+    """The rows that carry force figures as a Markdown table (``""`` when none does), with
+    the damage rate and the rate of successes without damage where a row's pins could
+    bend (``–`` for a row with rigid pins)."""
     shown = {row_id: entry for row_id, entry in rows.items() if has_forces(entry)}
     if not shown:
         return ""
+    damage = any(f"{DAMAGE_COLUMNS[0][0]}_mean" in entry for entry in shown.values())
+    columns = FORCE_COLUMNS + (DAMAGE_COLUMNS if damage else ())
     lines = [
-        "| ID | policy | eval env | " + " | ".join(head for _, head in FORCE_COLUMNS) + " |",
-        "|---|---|---|" + "---|" * len(FORCE_COLUMNS),
+        "| ID | policy | eval env | " + " | ".join(head for _, head in columns) + " |",
+        "|---|---|---|" + "---|" * len(columns),
     ]
     for row_id, entry in shown.items():
         cells = [row_id, entry["policy"], env_label(entry["eval_env"])]
-        for name, _ in FORCE_COLUMNS:
-            cells.append(f"{entry[f'{name}_mean']:.2f} ± {entry[f'{name}_std']:.2f}")
+        for name, _ in columns:
+            if f"{name}_mean" in entry:
+                cells.append(f"{entry[f'{name}_mean']:.2f} ± {entry[f'{name}_std']:.2f}")
+            else:
+                cells.append("–")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -158,6 +158,12 @@ class StudyConfig:
                     f"kinds={self.kinds!r} with pins='elastic-plastic'; allowed: () or ('bent',)"
                 )
 
+    @property
+    def workpieces(self) -> int:
+        """Workpieces the study runs: ``samples`` bent ones, and ``kind_samples`` of each
+        other kind of ``kinds``."""
+        return self.samples + self.kind_samples * sum(kind != "bent" for kind in self.kinds)
+
     def elastic_pins(self) -> ElasticPins | None:
         """The workpieces' bending pins (damaged beyond half the radial clearance), or
         ``None`` for rigid ones."""

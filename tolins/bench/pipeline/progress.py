@@ -149,8 +149,7 @@ def _budget(name: str, kind: str, profile: Profile, backend: str) -> tuple[float
     if kind == "demonstrations":
         return profile.demonstrations * HORIZON, "demo-rollout"
     if kind == "study":
-        config = settings.study_settings(profile, backend)
-        return config.samples + (len(config.kinds) - 1) * config.kind_samples, "study"
+        return settings.study_settings(profile, backend).workpieces, "study"
     if kind == "evaluation" and name == TRAJECTORIES:
         return (TRAJECTORY_EPISODES + 1) * HORIZON, "eval-rollout"
     factor = 1.0

@@ -4,6 +4,7 @@ them as given."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING
 
 from tolins.bench.jobs.demonstrations import DemoSpec, demo_stages
@@ -94,13 +95,12 @@ def study_settings(profile: Profile, backend: str, workers: int = 2) -> StudyCon
     profile's posterior samples per goal query."""
     from tolins.inference.study import StudyConfig
 
-    kind_samples = min(StudyConfig.kind_samples, profile.study_samples)
-    workpieces = profile.study_samples + kind_samples * (len(StudyConfig.kinds) - 1)
-    return StudyConfig(
+    study = StudyConfig(
         samples=profile.study_samples,
         seed=0,
         particles=profile.study_particles or StudyConfig.particles,
-        workers=max(1, min(workers, workpieces // STUDY_WORKPIECES_PER_PROCESS)),
         physics=backend == "mujoco",
-        kind_samples=kind_samples,
+        kind_samples=min(StudyConfig.kind_samples, profile.study_samples),
     )
+    processes = study.workpieces // STUDY_WORKPIECES_PER_PROCESS
+    return dataclasses.replace(study, workers=max(1, min(workers, processes)))

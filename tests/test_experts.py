@@ -73,15 +73,13 @@ def test_demo_does_not_depend_on_the_number_of_workers() -> None:
 
 
 @pytest.mark.slow
-def test_demo_command_prints_the_table_with_the_pandas_rows() -> None:
-    argv = ["demo", "--episodes", "2", "--robot-episodes", "1"]
-    result = subprocess.run(
-        [sys.executable, "-m", "tolins.cli", *argv], capture_output=True, text=True, check=True
-    )
+def test_demo_command_prints_the_table_with_the_pandas_rows(capsys) -> None:
+    assert main(["demo", "--episodes", "2", "--robot-episodes", "1"]) == 0
+    printed = capsys.readouterr().out
     for task in TASKS:
-        assert result.stdout.count(f"| tolins/{task.name}-v2 |") == 2
-        assert result.stdout.count(f"| tolins/{task.name}Panda-v3 |") == 2
-    assert "success rate" in result.stdout and "1 per Panda row" in result.stdout
+        assert printed.count(f"| tolins/{task.name}-v2 |") == 2
+        assert printed.count(f"| tolins/{task.name}Panda-v3 |") == 2
+    assert "success rate" in printed and "1 per Panda row" in printed
 
 
 @pytest.mark.slow

@@ -17,7 +17,6 @@ import dataclasses
 import threading
 from dataclasses import dataclass
 
-import cma
 import numpy as np
 
 from tolins.geometry.specs import CircularSocket
@@ -170,6 +169,8 @@ def _refine(
     # pycma seeds numpy's global RNG and ask() draws from it: hold it for the whole search,
     # or two searches in threads (π_φ* evaluations run two at a time) interleave their
     # draws and neither is reproducible.
+    import cma  # 0.8 s (it loads scipy.stats and matplotlib): only where a goal is searched
+
     with _GLOBAL_RNG:
         es = cma.CMAEvolutionStrategy(start * scale, 0.25 * spec.clearance, options)
         while not es.stop():

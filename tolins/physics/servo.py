@@ -441,12 +441,13 @@ class ServoStepper:
         segments, self._window_left = chunk_segments(n, self._window_left, self.step_factor)
         step = functools.partial(mujoco.mj_step, m, d)
         if plasticity is not None and self.step_factor == 1:
-            left = n
-            while left:
-                k = plasticity.steps(d.qpos, d.qvel, d.ctrl, left)
-                left -= k
-                run_chunk(step, [m], k, not left)
-                plasticity.update(d.qpos)
+            plastic_chunks(
+                n,
+                [0],
+                lambda _, left: plasticity.steps(d.qpos, d.qvel, d.ctrl, left),
+                lambda k, last, _: run_chunk(step, [m], k, last),
+                lambda _: plasticity.update(d.qpos),
+            )
             return
         pins = [] if plasticity is None else [(plasticity, d.qpos, d.qvel)]
         with pins_held([m], pins):
@@ -478,6 +479,32 @@ def run_chunk(
         return
     with sensors_off(models):
         step(k)
+
+
+def plastic_chunks(
+    n: int,
+    sims: list[int],
+    allowed: Callable[[int, int], int],
+    run: Callable[[int, bool, list[int]], None],
+    update: Callable[[int], None],
+) -> None:
+    """``n`` contact steps of simulations ``sims`` with elastic-plastic pins, in chunks that
+    no pin can yield within: each simulation takes the chunk its own state allows
+    (``allowed(sim, steps_left)``, :meth:`PinPlasticity.steps`), the simulations with the
+    same chunk length and end are stepped together (``run(k, last, sims)``), then each one's
+    return mapping runs (``update(sim)``)."""
+    left = dict.fromkeys(sims, n)
+    while left:
+        chunks = {i: allowed(i, rest) for i, rest in left.items()}
+        groups: dict[tuple[int, bool], list[int]] = {}
+        for i, k in chunks.items():
+            left[i] -= k
+            groups.setdefault((k, not left[i]), []).append(i)
+        for (k, last), members in groups.items():
+            run(k, last, members)
+        for i in chunks:
+            update(i)
+        left = {i: rest for i, rest in left.items() if rest}
 
 
 def bent_limits(
@@ -693,26 +720,23 @@ class BatchServo:
 
     def _plastic_steps(self, n: int, ids: np.ndarray) -> None:
         """As :meth:`ServoStepper.physics_steps` on the contact step with elastic-plastic
-        pins, for simulations ``ids``: each takes the chunks its own state allows
-        (:meth:`PinPlasticity.steps`), one ``Batch.step`` per chunk length and end, then its
-        return mapping."""
-        left = dict.fromkeys(ids.tolist(), n)
-        while left:
-            chunks = {
-                i: self.plasticity[i].steps(self.qpos[i], self.qvel[i], self.ctrl[i], rest)
-                for i, rest in left.items()
-            }
-            groups: dict[tuple[int, bool], list[int]] = {}
-            for i, k in chunks.items():
-                left[i] -= k
-                groups.setdefault((k, not left[i]), []).append(i)
-            for (k, last), members in groups.items():
-                chosen = np.array(members, dtype=np.intp)
-                models = [self.models[i] for i in members]
-                run_chunk(lambda j, c=chosen: self.batch.step(c, nstep=j), models, k, last)
-            for i in chunks:
-                self.plasticity[i].update(self.qpos[i])
-            left = {i: rest for i, rest in left.items() if rest}
+        pins, for simulations ``ids``: :func:`plastic_chunks`, one ``Batch.step`` per chunk
+        length and end."""
+
+        def run(k: int, last: bool, members: list[int]) -> None:
+            chosen = np.array(members, dtype=np.intp)
+            models = [self.models[i] for i in members]
+            run_chunk(lambda j: self.batch.step(chosen, nstep=j), models, k, last)
+
+        plastic_chunks(
+            n,
+            ids.tolist(),
+            lambda i, rest: self.plasticity[i].steps(
+                self.qpos[i], self.qvel[i], self.ctrl[i], rest
+            ),
+            run,
+            lambda i: self.plasticity[i].update(self.qpos[i]),
+        )
 
     def higher_force(self, peak: np.ndarray) -> np.ndarray:
         touch = sequential_sum(self.sensordata[self.ids, self.layout.touch])

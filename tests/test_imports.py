@@ -240,6 +240,31 @@ def test_run_configs_do_not_load_torch(module: str) -> None:
     assert not {name for name in loaded if name.startswith("torch")}
 
 
+_PARSERS = """
+import contextlib, io, json, sys
+from tolins.cli import main
+with contextlib.redirect_stdout(io.StringIO()):
+    try:
+        main(["--help"])
+    except SystemExit:
+        pass
+print(json.dumps(sorted(sys.modules)))
+"""
+
+
+def test_the_command_lines_parsers_load_no_learning_optimiser_or_plotting() -> None:
+    """``tolins --help`` builds every command's parser without torch, pycma, scipy.stats or
+    matplotlib (pycma alone loads the last two, 0.8 s): each is loaded where it is used."""
+    result = subprocess.run(
+        [sys.executable, "-c", _PARSERS], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 0, result.stderr
+    loaded = set(json.loads(result.stdout.strip().splitlines()[-1]))
+    assert "tolins.cli.infer_study" in loaded  # the probe did build the parsers
+    heavy = ("torch", "cma", "scipy.stats", "matplotlib")
+    assert not {name for name in loaded if name.split(".")[0] in heavy or name in heavy}
+
+
 @pytest.mark.parametrize(
     "module", ["tolins.inference", "tolins.inference.study", "tolins.inference.report"]
 )

@@ -155,6 +155,8 @@ def _refine(
     popsize: int,
 ) -> tuple[np.ndarray, float, int]:
     """CMA-ES in mm-scaled coordinates ``[x, y, θ·L]`` (L: the farthest hole's distance)."""
+    import cma  # 0.8 s (it loads scipy.stats and matplotlib): only where a goal is searched
+
     scale = np.array([1.0, 1.0, max(float(np.max(np.hypot(*spec.hole_centers.T))), 1.0)])
     options = {
         "seed": int(rng.integers(1, 2**31 - 1)),
@@ -169,8 +171,6 @@ def _refine(
     # pycma seeds numpy's global RNG and ask() draws from it: hold it for the whole search,
     # or two searches in threads (π_φ* evaluations run two at a time) interleave their
     # draws and neither is reproducible.
-    import cma  # 0.8 s (it loads scipy.stats and matplotlib): only where a goal is searched
-
     with _GLOBAL_RNG:
         es = cma.CMAEvolutionStrategy(start * scale, 0.25 * spec.clearance, options)
         while not es.stop():

@@ -9,6 +9,9 @@ The probes import for real. ``import tolins.x`` runs ``tolins/__init__.py`` firs
 registers the environments and so imports everything. Each probe therefore runs in a fresh
 interpreter that stands in an empty ``tolins`` package (same ``__path__``, no ``__init__``
 code) before importing the subpackage, then reports which ``tolins`` modules got loaded.
+The probes that look only at ``tolins`` modules run in children forked from one
+interpreter that has loaded the third-party libraries they share (torch, pycma, MuJoCo,
+gymnasium) once; those that look at the third-party libraries too start afresh.
 """
 
 from __future__ import annotations
@@ -126,6 +129,58 @@ def _loaded(module: str, *, bare: bool = True) -> frozenset[str]:
     return frozenset(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
+_FORKING_PROBE = """
+import importlib, importlib.util, json, os, sys, types
+import cma, gymnasium, mujoco, numpy, torch  # the libraries the probed layers share
+spec = importlib.util.find_spec("tolins")
+for line in sys.stdin:
+    reader, writer = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(reader)
+        package = types.ModuleType("tolins")
+        package.__path__ = list(spec.submodule_search_locations)
+        sys.modules["tolins"] = package
+        try:
+            importlib.import_module(line.strip())
+            answer = sorted(n for n in sys.modules if n == "tolins" or n.startswith("tolins."))
+        except BaseException as error:
+            answer = repr(error)
+        with os.fdopen(writer, "w") as out:
+            out.write(json.dumps(answer))
+        os._exit(0)
+    os.close(writer)
+    with os.fdopen(reader) as answer:
+        print(answer.read(), flush=True)
+    os.waitpid(pid, 0)
+"""
+
+
+@pytest.fixture(scope="module")
+def tolins_probe():
+    """``probe(module)``: the ``tolins`` modules that importing ``module`` in a bare package
+    loads, each in a child forked from one interpreter (checked to hold ``module``)."""
+    server = subprocess.Popen(
+        [sys.executable, "-c", _FORKING_PROBE],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+
+    @functools.cache
+    def probe(module: str) -> frozenset[str]:
+        server.stdin.write(module + "\n")
+        server.stdin.flush()
+        answer = json.loads(server.stdout.readline())
+        assert isinstance(answer, list), f"importing {module}: {answer}"
+        assert module in answer
+        return frozenset(answer)
+
+    yield probe
+    server.stdin.close()
+    server.wait(timeout=60)
+
+
 def _probe(module: str) -> frozenset[str]:
     """What importing ``module`` in a bare package loads, checked to hold ``module``: the
     probe did see it imported."""
@@ -168,8 +223,8 @@ def test_geometry_imports_nothing_else_of_tolins(module: str) -> None:
 
 
 @pytest.mark.parametrize("module", ["tolins.mjcf", "tolins.mjcf.model", "tolins.mjcf.board"])
-def test_mjcf_does_not_import_envs_or_policies(module: str) -> None:
-    loaded = _tolins(_probe(module))
+def test_mjcf_does_not_import_envs_or_policies(module: str, tolins_probe) -> None:
+    loaded = tolins_probe(module)
     forbidden = {
         name
         for name in loaded
@@ -213,8 +268,8 @@ _LATER_LAYERS = {
 
 
 @pytest.mark.parametrize("module", sorted(_LATER_LAYERS))
-def test_layers_do_not_import_the_layers_above_them(module: str) -> None:
-    loaded = _tolins(_probe(module))
+def test_layers_do_not_import_the_layers_above_them(module: str, tolins_probe) -> None:
+    loaded = tolins_probe(module)
     forbidden = {name for name in loaded if name.startswith(_LATER_LAYERS[module])}
     assert not forbidden, f"{module} imports {sorted(forbidden)}"
 

@@ -129,29 +129,20 @@ def _loaded(module: str, *, bare: bool = True) -> frozenset[str]:
     return frozenset(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
+#: ``_PROBE`` (its argument) for each module named on stdin, in a child forked from an
+#: interpreter that has loaded the libraries the probed layers share.
 _FORKING_PROBE = """
-import importlib, importlib.util, json, os, sys, types
-import cma, gymnasium, mujoco, numpy, torch  # the libraries the probed layers share
-spec = importlib.util.find_spec("tolins")
+import json, os, sys
+import cma, gymnasium, mujoco, numpy, torch
 for line in sys.stdin:
-    reader, writer = os.pipe()
     pid = os.fork()
     if pid == 0:
-        os.close(reader)
-        package = types.ModuleType("tolins")
-        package.__path__ = list(spec.submodule_search_locations)
-        sys.modules["tolins"] = package
         try:
-            importlib.import_module(line.strip())
-            answer = sorted(n for n in sys.modules if n == "tolins" or n.startswith("tolins."))
+            exec(sys.argv[1].format(module=line.strip(), bare=True))
         except BaseException as error:
-            answer = repr(error)
-        with os.fdopen(writer, "w") as out:
-            out.write(json.dumps(answer))
+            print(json.dumps(repr(error)))
+        sys.stdout.flush()
         os._exit(0)
-    os.close(writer)
-    with os.fdopen(reader) as answer:
-        print(answer.read(), flush=True)
     os.waitpid(pid, 0)
 """
 
@@ -159,9 +150,10 @@ for line in sys.stdin:
 @pytest.fixture(scope="module")
 def tolins_probe():
     """``probe(module)``: the ``tolins`` modules that importing ``module`` in a bare package
-    loads, each in a child forked from one interpreter (checked to hold ``module``)."""
+    loads (``_PROBE``), each in a child forked from one interpreter (checked to hold
+    ``module``)."""
     server = subprocess.Popen(
-        [sys.executable, "-c", _FORKING_PROBE],
+        [sys.executable, "-c", _FORKING_PROBE, _PROBE],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
@@ -173,8 +165,9 @@ def tolins_probe():
         server.stdin.flush()
         answer = json.loads(server.stdout.readline())
         assert isinstance(answer, list), f"importing {module}: {answer}"
-        assert module in answer
-        return frozenset(answer)
+        loaded = _tolins(frozenset(answer))
+        assert module in loaded
+        return frozenset(loaded)
 
     yield probe
     server.stdin.close()
